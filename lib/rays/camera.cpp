@@ -1,0 +1,40 @@
+#include "rays/camera.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "geometry/input_error.h"
+
+namespace raylab {
+
+Camera frame_camera(const Bounds3f& bounds, double fov_degrees, const Vec3d& from) {
+  if (bounds.empty() || !is_finite(bounds.lo) || !is_finite(bounds.hi))
+    throw InputError("camera: the scene is empty or not finite, nothing to frame");
+  if (!(fov_degrees > 0.0 && fov_degrees < 180.0))
+    throw InputError("camera: field of view " + std::to_string(fov_degrees) + " is outside (0, 180) degrees");
+  if (!is_finite(from) || dot(from, from) == 0.0) throw InputError("camera: the viewing direction is zero");
+  const Bounds3d b(Vec3d(bounds.lo), Vec3d(bounds.hi));
+  const Vec3d centre = b.center();
+  double radius = 0.5 * length(b.diagonal());
+  if (radius == 0.0) radius = std::max(1.0, max_component(abs(centre))) * 1e-3;  // a single point
+  const double half_fov = 0.5 * fov_degrees * std::numbers::pi / 180.0;
+  const Vec3d dir_from = normalize(from);
+  Camera c;
+  c.eye = centre + dir_from * (radius / std::sin(half_fov));
+  c.forward = -dir_from;
+  const Vec3d world_up = std::abs(dir_from.y) > 0.999 ? Vec3d(0, 0, 1) : Vec3d(0, 1, 0);
+  c.right = normalize(cross(c.forward, world_up));
+  c.up = cross(c.right, c.forward);
+  c.tan_half_fov = std::tan(half_fov);
+  return c;
+}
+
+Ray camera_ray(const Camera& camera, double px, double py, int width, int height) {
+  const double aspect = static_cast<double>(width) / static_cast<double>(height);
+  const double sx = (2.0 * px / width - 1.0) * camera.tan_half_fov * aspect;
+  const double sy = (1.0 - 2.0 * py / height) * camera.tan_half_fov;
+  const Vec3d d = normalize(camera.forward + camera.right * sx + camera.up * sy);
+  return Ray{Vec3f(camera.eye), Vec3f(d), 0.0f, std::numeric_limits<float>::infinity()};
+}
+
+}  // namespace raylab

@@ -1,0 +1,76 @@
+#pragma once
+/// The lecture's pbrt design (pbrt-v3 §4.1): a primitive has bounds, a closest-hit `intersect`
+/// and an any-hit `occluded`; an aggregate (accelerator) is itself a primitive, so aggregates
+/// nest, and a TransformedPrimitive (transformed_primitive.h) wraps any primitive in a
+/// transform. Dynamic dispatch lives here, at the primitive/aggregate boundary only; inside an
+/// accelerator the loops over nodes and shapes are templates.
+#include <cstddef>
+#include <string>
+
+#include "geometry/bounds.h"
+#include "geometry/ray.h"
+#include "scene/ray_counters.h"
+
+namespace raylab {
+
+class Primitive {
+ public:
+  virtual ~Primitive() = default;
+
+  virtual Bounds3f bounds() const = 0;
+
+  /// Closest hit with ray.tmin <= t < ray.tmax. On a hit, writes `hit`, sets ray.tmax = hit.t and
+  /// returns true; otherwise leaves both alone. An invalid ray (see is_valid) never hits.
+  virtual bool intersect(Ray& ray, Hit& hit) const = 0;
+  /// The same, adding this ray's work to `counters`.
+  virtual bool intersect(Ray& ray, Hit& hit, RayCounters& counters) const = 0;
+
+  /// Whether any hit exists with ray.tmin <= t <= ray.tmax.
+  virtual bool occluded(const Ray& ray) const = 0;
+  virtual bool occluded(const Ray& ray, RayCounters& counters) const = 0;
+};
+
+/// What an accelerator reports about itself next to timings.
+struct AccelStats {
+  std::size_t bytes = 0;        ///< memory of the acceleration structure (not of the scene geometry)
+  std::size_t nodes = 0;        ///< nodes or cells, 0 where not applicable
+  double sah_cost = -1.0;       ///< SAH cost of the finished structure, < 0 where not defined
+};
+
+class Aggregate : public Primitive {
+ public:
+  virtual std::string name() const = 0;
+  virtual AccelStats stats() const = 0;
+};
+
+/// Implements Primitive's four virtuals for an accelerator whose traversal is
+///   template <class Counters> bool intersect_impl(Ray&, Hit&, Counters&) const;
+///   template <class Counters> bool occluded_impl(const Ray&, Counters&) const;
+/// (CRTP), so each virtual call lands in one statically compiled loop.
+template <class Derived>
+class AggregateBase : public Aggregate {
+ public:
+  bool intersect(Ray& ray, Hit& hit) const final {
+    if (!is_valid(ray)) return false;
+    NoCounters c;
+    return self().intersect_impl(ray, hit, c);
+  }
+  bool intersect(Ray& ray, Hit& hit, RayCounters& counters) const final {
+    if (!is_valid(ray)) return false;
+    return self().intersect_impl(ray, hit, counters);
+  }
+  bool occluded(const Ray& ray) const final {
+    if (!is_valid(ray)) return false;
+    NoCounters c;
+    return self().occluded_impl(ray, c);
+  }
+  bool occluded(const Ray& ray, RayCounters& counters) const final {
+    if (!is_valid(ray)) return false;
+    return self().occluded_impl(ray, counters);
+  }
+
+ private:
+  const Derived& self() const { return static_cast<const Derived&>(*this); }
+};
+
+}  // namespace raylab

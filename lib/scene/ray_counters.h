@@ -1,0 +1,33 @@
+#pragma once
+/// Per-ray work counters. Traversal code is templated on the counter type: `RayCounters` counts,
+/// `NoCounters` compiles every increment away, so timed runs pay nothing for them.
+#include <cstdint>
+
+namespace raylab {
+
+struct RayCounters {
+  std::uint64_t nodes = 0;          ///< interior nodes (or cells) visited
+  std::uint64_t leaves = 0;         ///< leaves visited
+  std::uint64_t prim_tests = 0;     ///< ray-primitive intersection tests
+  std::uint64_t mailbox_skips = 0;  ///< tests saved by a mailbox
+
+  static constexpr bool enabled = true;
+  void node() { ++nodes; }
+  void leaf() { ++leaves; }
+  void prim_test() { ++prim_tests; }
+  void mailbox_skip() { ++mailbox_skips; }
+  RayCounters& operator+=(const RayCounters& o) {
+    nodes += o.nodes; leaves += o.leaves; prim_tests += o.prim_tests; mailbox_skips += o.mailbox_skips;
+    return *this;
+  }
+};
+
+struct NoCounters {
+  static constexpr bool enabled = false;
+  void node() {}
+  void leaf() {}
+  void prim_test() {}
+  void mailbox_skip() {}
+};
+
+}  // namespace raylab

@@ -1,0 +1,347 @@
+// The `raylab` command-line tool: list accelerators and scenes, describe a scene, trace a ray set
+// through an accelerator (optionally checked against the exact oracle), render an image or a
+// traversal-cost heatmap. Bad input of any kind: one line `raylab: error: ...`, exit status 2.
+#include <sys/resource.h>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/hit_comparison.h"
+#include "accel/common/tracer.h"
+#include "geometry/input_error.h"
+#include "rays/camera.h"
+#include "rays/ray_file.h"
+#include "rays/ray_generators.h"
+#include "scene/scene_spec.h"
+#include "tools/heatmap_image.h"
+
+namespace raylab {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::size_t peak_rss_bytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<std::size_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
+}
+
+/// Runs `work` and, when it takes longer than a few seconds, prints a progress line to stderr
+/// every 5 s and a closing line with its duration.
+template <class Work>
+auto timed_step(const std::string& what, Work&& work, double* seconds = nullptr) {
+  std::mutex m;
+  std::condition_variable cv;
+  bool done = false;
+  const auto start = Clock::now();
+  std::thread reporter([&] {
+    std::unique_lock lock(m);
+    int ticks = 0;
+    while (!cv.wait_for(lock, std::chrono::seconds(ticks == 0 ? 3 : 5), [&] { return done; })) {
+      ++ticks;
+      std::fprintf(stderr, "raylab: %s ... %.0f s\n", what.c_str(),
+                   std::chrono::duration<double>(Clock::now() - start).count());
+    }
+    if (ticks > 0)
+      std::fprintf(stderr, "raylab: %s done in %.1f s\n", what.c_str(),
+                   std::chrono::duration<double>(Clock::now() - start).count());
+  });
+  auto finish = [&] {
+    { std::lock_guard lock(m); done = true; }
+    cv.notify_all();
+    reporter.join();
+    if (seconds) *seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  try {
+    auto result = work();
+    finish();
+    return result;
+  } catch (...) {
+    finish();
+    throw;
+  }
+}
+
+/// Ray kinds traced as any-hit (occluded) queries.
+bool is_any_hit_spec(const std::string& ray_spec) {
+  const std::string name = parse_spec(ray_spec).name;
+  return name == "shadow" || name == "ao";
+}
+
+std::vector<Ray> make_rays(const std::string& spec, const std::shared_ptr<const Scene>& scene) {
+  // Generators that start from visible surfaces (diffuse, shadow, ao) trace primary rays first,
+  // through Embree: fast, and independent of the accelerator under test.
+  std::unique_ptr<Aggregate> helper;
+  FirstHitFunction first_hit = [&](const Ray& r) {
+    if (!helper) helper = make_accelerator("embree-robust", scene);
+    Ray ray = r;
+    Hit hit;
+    helper->intersect(ray, hit);
+    return hit;
+  };
+  return generate_rays(spec, *scene, first_hit);
+}
+
+void print_accels() {
+  for (const auto& k : accelerator_kinds()) {
+    std::cout << k.name << "\n    " << k.summary << "\n";
+    for (const auto& p : k.params)
+      std::cout << "    " << p.key << "=" << "  (default " << p.default_value << ") " << p.description << "\n";
+    SpecReader none(parse_spec(k.name));
+    std::cout << "    accuracy: " << k.accuracy(none).statement << "\n";
+  }
+}
+
+void print_scenes() {
+  for (const auto& k : scene_kinds()) {
+    std::cout << k.name << "\n    " << k.summary << "\n";
+    for (const auto& p : k.params)
+      std::cout << "    " << p.key << "=" << "  (default " << p.default_value << ") " << p.description << "\n";
+  }
+}
+
+struct InfoOptions {
+  std::string scene;
+  bool json = false;
+};
+
+int run_info(const InfoOptions& o) {
+  const auto scene = timed_step("loading " + o.scene, [&] { return make_scene(o.scene); });
+  const SceneInfo info = describe(*scene);
+  nlohmann::ordered_json j;
+  j["scene"] = o.scene;
+  j["primitives"] = info.primitives;
+  j["triangles"] = info.triangles;
+  j["spheres"] = info.spheres;
+  j["instances"] = info.instances;
+  j["degenerate_triangles"] = info.degenerate_triangles;
+  j["closed"] = info.closed;
+  j["bounds_min"] = {info.bounds.lo.x, info.bounds.lo.y, info.bounds.lo.z};
+  j["bounds_max"] = {info.bounds.hi.x, info.bounds.hi.y, info.bounds.hi.z};
+  if (o.json) {
+    std::cout << j.dump() << "\n";
+  } else {
+    for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << it.value().dump() << "\n";
+  }
+  return 0;
+}
+
+struct TraceCommand {
+  std::string scene, accel = "embree", rays = "primary:65536", check, hits_out, rays_out;
+  int threads = 0;
+  bool json = false;
+  bool counters = true;
+};
+
+int run_trace(const TraceCommand& o) {
+  if (!o.check.empty() && o.check != "exact" && o.check != "brute")
+    throw InputError("--check " + o.check + ": expected exact or brute");
+  if (o.threads < 0 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 0..1024");
+  // Validate the accelerator spec before any expensive work.
+  {
+    SpecReader reader(parse_spec(o.accel));
+    reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);
+  }
+  const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
+  const std::vector<Ray> rays = timed_step("generating rays " + o.rays, [&] { return make_rays(o.rays, scene); });
+  if (!o.rays_out.empty()) write_rays(o.rays_out, rays);
+  const bool any_hit = is_any_hit_spec(o.rays);
+
+  double build_s = 0;
+  const std::size_t rss_before = peak_rss_bytes();
+  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene); }, &build_s);
+  TraceOptions topt{o.threads, false, any_hit};
+  const TraceResult timed = timed_step("tracing", [&] { return trace_rays(*accel, rays, topt); });
+  RayCounters counters;
+  if (o.counters) {
+    topt.counters = true;
+    counters = timed_step("counting", [&] { return trace_rays(*accel, rays, topt); }).counters;
+  }
+  const AccelStats stats = accel->stats();
+  const double n = static_cast<double>(rays.size());
+
+  nlohmann::ordered_json j;
+  j["scene"] = o.scene;
+  j["triangles"] = scene->instanced() ? scene->base->mesh.size() * scene->instances.size() : scene->mesh.size();
+  j["primitives"] = scene->total_primitive_count();
+  j["accel"] = o.accel;
+  j["build_s"] = build_s;
+  j["ray_spec"] = o.rays;
+  j["rays"] = rays.size();
+  j["query"] = any_hit ? "occluded" : "intersect";
+  j["threads"] = resolve_thread_count(o.threads);
+  j["trace_s"] = timed.seconds;
+  j["mrays_per_s"] = timed.seconds > 0 ? n / timed.seconds * 1e-6 : 0.0;
+  j["hit_rate"] = n > 0 ? static_cast<double>(timed.hit_count) / n : 0.0;
+  j["nodes_per_ray"] = n > 0 ? static_cast<double>(counters.nodes) / n : 0.0;
+  j["leaves_per_ray"] = n > 0 ? static_cast<double>(counters.leaves) / n : 0.0;
+  j["prim_tests_per_ray"] = n > 0 ? static_cast<double>(counters.prim_tests) / n : 0.0;
+  j["mailbox_skips_per_ray"] = n > 0 ? static_cast<double>(counters.mailbox_skips) / n : 0.0;
+  j["accel_bytes"] = stats.bytes;
+  j["bytes_per_primitive"] = scene->total_primitive_count() > 0 ? stats.bytes / scene->total_primitive_count() : 0.0;
+  j["accel_nodes"] = stats.nodes;
+  if (stats.sah_cost >= 0) j["sah_cost"] = stats.sah_cost;
+  j["build_rss_growth_bytes"] = peak_rss_bytes() - rss_before;
+
+  if (!o.check.empty()) {
+    double check_s = 0;
+    auto reference = timed_step("building the " + o.check + " reference",
+                                [&] { return make_accelerator(o.check, scene); });
+    const TraceResult ref = timed_step("tracing the " + o.check + " reference",
+                                       [&] { return trace_rays(*reference, rays, TraceOptions{o.threads, false, any_hit}); },
+                                       &check_s);
+    const HitComparison c = any_hit ? compare_occlusion(timed.blocked, ref.blocked)
+                                    : compare_hits(rays, timed.hits, ref.hits, length(Vec3d(scene->bounds().diagonal())));
+    j["check"] = o.check;
+    j["check_s"] = check_s;
+    j["mismatches"] = c.mismatches;
+    j["ties"] = c.ties;
+    j["false_hits"] = c.false_hits;
+    j["missed_hits"] = c.missed_hits;
+    j["wrong_t"] = c.wrong_t;
+    j["first_mismatch_rays"] = c.first_mismatches;
+  }
+  j["peak_rss_bytes"] = peak_rss_bytes();
+  if (!o.hits_out.empty()) {
+    if (any_hit) {
+      std::vector<Hit> as_hits(rays.size());
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        if (timed.blocked[i]) as_hits[i].prim = 0;  // occluded: prim 0 marks "blocked", t unknown
+      write_hits_csv(o.hits_out, as_hits);
+    } else {
+      write_hits_csv(o.hits_out, timed.hits);
+    }
+  }
+  if (o.json) {
+    std::cout << j.dump() << "\n";
+  } else {
+    for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << it.value().dump() << "\n";
+  }
+  return 0;
+}
+
+struct RenderCommand {
+  std::string scene, accel = "embree", out;
+  int width = 512, height = 512, threads = 0;
+  bool heatmap = false;
+};
+
+int run_render(const RenderCommand& o) {
+  if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
+    throw InputError("--width/--height must be in [1, 16384]");
+  if (o.out.size() < 5 || o.out.substr(o.out.size() - 4) != ".png") throw InputError("--out " + o.out + ": expected a .png path");
+  const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
+  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene); });
+  const Camera camera = frame_camera(scene->bounds());
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<std::size_t>(o.width) * o.height);
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) rays.push_back(camera_ray(camera, x + 0.5, y + 0.5, o.width, o.height));
+  std::vector<float> values(rays.size());
+  // Heatmaps need one counter set per pixel, so they trace ray by ray with counters on.
+  if (o.heatmap) {
+    timed_step("rendering heatmap", [&] {
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        RayCounters c;
+        Ray r = rays[i];
+        Hit h;
+        accel->intersect(r, h, c);
+        values[i] = static_cast<float>(c.nodes + c.leaves + c.prim_tests);
+      }
+      return 0;
+    });
+    write_heatmap_png(o.out, values, o.width, o.height, "nodes + leaves + primitive tests per pixel (" + o.accel + ")");
+  } else {
+    const TraceResult result = timed_step("rendering", [&] { return trace_rays(*accel, rays, TraceOptions{o.threads}); });
+    const Vec3d light = normalize(Vec3d(0.4, 0.8, 0.45));
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit& h = result.hits[i];
+      if (!h.valid()) { values[i] = -1.0f; continue; }
+      values[i] = static_cast<float>(shading_cosine(*scene, h, rays[i], light));
+    }
+    write_shaded_png(o.out, values, o.width, o.height);
+  }
+  std::cerr << "raylab: wrote " << o.out << "\n";
+  return 0;
+}
+
+}  // namespace
+}  // namespace raylab
+
+int main(int argc, char** argv) {
+  using namespace raylab;
+  CLI::App app{"raylab: a laboratory for ray shooting (see README.md)"};
+  app.require_subcommand(1);
+
+  app.add_subcommand("accels", "list the accelerators, their parameters and accuracy bounds");
+  app.add_subcommand("scenes", "list the scene kinds and their parameters");
+  auto* cgal = app.add_subcommand("cgal-meshes", "list the CGAL demo meshes available as cgal:NAME");
+
+  InfoOptions info;
+  auto* info_cmd = app.add_subcommand("info", "print triangles, bounds, degenerate count and closedness of a scene");
+  info_cmd->add_option("scene", info.scene, "scene spec")->required();
+  info_cmd->add_flag("--json", info.json, "print one JSON object");
+
+  TraceCommand trace;
+  auto* trace_cmd = app.add_subcommand("trace", "build an accelerator on a scene and trace a ray set");
+  trace_cmd->add_option("--scene", trace.scene, "scene spec, e.g. cgal:bunny00 or sphereflake:depth=3")->required();
+  trace_cmd->add_option("--accel", trace.accel, "accelerator spec, e.g. embree:quality=high (see `raylab accels`)");
+  trace_cmd->add_option("--rays", trace.rays, "ray spec: primary:N, diffuse:N, shadow:N, ao:N, lines:N, edges:N, vertices:N, file:PATH");
+  trace_cmd->add_option("--threads", trace.threads, "tracing threads (0: all; 1: single-core figures)");
+  trace_cmd->add_option("--check", trace.check, "compare every ray against a reference: exact | brute");
+  trace_cmd->add_option("--hits-out", trace.hits_out, "write hits as CSV ray,prim,t,u,v");
+  trace_cmd->add_option("--rays-out", trace.rays_out, "write the traced rays in the ray file format");
+  trace_cmd->add_flag("--json", trace.json, "print one JSON object instead of key: value lines");
+  trace_cmd->add_flag("!--no-counters", trace.counters, "skip the second, counted pass");
+
+  RenderCommand render;
+  auto* render_cmd = app.add_subcommand("render", "render a shaded image or a traversal-cost heatmap to PNG");
+  render_cmd->add_option("--scene", render.scene, "scene spec")->required();
+  render_cmd->add_option("--accel", render.accel, "accelerator spec");
+  render_cmd->add_option("--out", render.out, "output .png")->required();
+  render_cmd->add_option("--width", render.width, "image width");
+  render_cmd->add_option("--height", render.height, "image height");
+  render_cmd->add_option("--threads", render.threads, "threads");
+  render_cmd->add_flag("--heatmap", render.heatmap, "nodes + tests per pixel with a colour bar");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "raylab: error: " << e.what() << " (see raylab --help)\n";
+    return 2;
+  }
+  try {
+    if (app.got_subcommand("accels")) print_accels();
+    else if (app.got_subcommand("scenes")) print_scenes();
+    else if (cgal->parsed()) { for (const auto& n : cgal_mesh_names()) std::cout << "cgal:" << n << "\n"; }
+    else if (info_cmd->parsed()) return run_info(info);
+    else if (trace_cmd->parsed()) return run_trace(trace);
+    else if (render_cmd->parsed()) return run_render(render);
+    return 0;
+  } catch (const InputError& e) {
+    std::cerr << "raylab: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "raylab: error: out of memory\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "raylab: error: " << e.what() << "\n";
+    return 3;
+  }
+}
