@@ -19,11 +19,13 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
+#include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
 #include "geometry/input_error.h"
 #include "rays/camera.h"
 #include "rays/ray_file.h"
 #include "rays/ray_generators.h"
+#include "scene/cgal_meshes.h"
 #include "scene/scene_spec.h"
 #include "tools/heatmap_image.h"
 
@@ -72,26 +74,6 @@ auto timed_step(const std::string& what, Work&& work, double* seconds = nullptr)
     finish();
     throw;
   }
-}
-
-/// Ray kinds traced as any-hit (occluded) queries.
-bool is_any_hit_spec(const std::string& ray_spec) {
-  const std::string name = parse_spec(ray_spec).name;
-  return name == "shadow" || name == "ao";
-}
-
-std::vector<Ray> make_rays(const std::string& spec, const std::shared_ptr<const Scene>& scene) {
-  // Generators that start from visible surfaces (diffuse, shadow, ao) trace primary rays first,
-  // through Embree: fast, and independent of the accelerator under test.
-  std::unique_ptr<Aggregate> helper;
-  FirstHitFunction first_hit = [&](const Ray& r) {
-    if (!helper) helper = make_accelerator("embree-robust", scene);
-    Ray ray = r;
-    Hit hit;
-    helper->intersect(ray, hit);
-    return hit;
-  };
-  return generate_rays(spec, *scene, first_hit);
 }
 
 void print_accels() {
@@ -155,9 +137,9 @@ int run_trace(const TraceCommand& o) {
     reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);
   }
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
-  const std::vector<Ray> rays = timed_step("generating rays " + o.rays, [&] { return make_rays(o.rays, scene); });
+  const std::vector<Ray> rays = timed_step("generating rays " + o.rays, [&] { return make_ray_set(o.rays, scene); });
   if (!o.rays_out.empty()) write_rays(o.rays_out, rays);
-  const bool any_hit = is_any_hit_spec(o.rays);
+  const bool any_hit = is_any_hit_ray_spec(o.rays);
 
   double build_s = 0;
   const std::size_t rss_before = peak_rss_bytes();

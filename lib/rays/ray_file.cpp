@@ -74,10 +74,11 @@ std::vector<std::string_view> split(std::string_view line, std::string_view sepa
 std::string parse_float(std::string_view s, float& out) {
   const char* end = s.data() + s.size();
   const auto [p, ec] = std::from_chars(s.data(), end, out, std::chars_format::general);
-  if (ec == std::errc::result_out_of_range) return "'" + std::string(s) + "' is outside the float range";
-  if (ec != std::errc() || p != end) return "'" + std::string(s) + "' is not a number";
-  if (std::isnan(out)) return "NaN is not allowed";
-  return {};
+  if (ec == std::errc() && p == end) return std::isnan(out) ? "NaN is not allowed" : "";
+  std::string fault = "'";
+  fault += s;
+  fault += ec == std::errc::result_out_of_range ? "' is outside the float range" : "' is not a number";
+  return fault;
 }
 
 class LineReader {

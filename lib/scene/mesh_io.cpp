@@ -15,6 +15,7 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <sstream>
 #include <string_view>
 #include <vector>
 
@@ -159,12 +160,6 @@ class TokenReader {
   std::size_t pos_ = 0, line_;
 };
 
-/// True when a face's corner list names a vertex twice (OpenMesh drops such faces).
-bool has_repeated_corner(std::vector<std::int64_t>& corners) {
-  std::sort(corners.begin(), corners.end());
-  return std::adjacent_find(corners.begin(), corners.end()) != corners.end();
-}
-
 struct ScanResult {
   std::size_t faces = 0, triangles = 0, polygons = 0;
 };
@@ -172,7 +167,10 @@ struct ScanResult {
 // ---------------------------------------------------------------------------------------------
 // OFF (Princeton Shape Benchmark / Geomview): [ST][C][N]OFF, "V F E", V vertex lines, F face lines.
 
-ScanResult scan_off(const std::string& path, std::string_view text) {
+/// Also writes `canonical`: the same mesh as plain OFF without comments, colours or normals, which
+/// is what OpenMesh's OFF reader parses (it rejects comments before the header and misreads
+/// per-face colours in files whose header does not announce them).
+ScanResult scan_off(const std::string& path, std::string_view text, std::string& canonical) {
   LineReader lines(text, true);
   std::vector<std::string_view> tok;
   if (!lines.next(tok)) fail(path, "empty file");
@@ -200,6 +198,8 @@ ScanResult scan_off(const std::string& path, std::string_view text) {
     fail_at(path, lines.line(),
             "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces, more than the remaining " +
                 std::to_string(rest) + " bytes can hold");
+  canonical.reserve(text.size());
+  canonical += "OFF\n" + std::to_string(nv) + " " + std::to_string(nf) + " 0\n";
   for (std::int64_t i = 0; i < nv; ++i) {
     if (!lines.next(tok)) fail(path, "unexpected end of file at vertex " + std::to_string(i) + " of " + std::to_string(nv));
     if (tok.size() < 3) fail_at(path, lines.line(), "vertex " + std::to_string(i) + ": expected 3 coordinates");
@@ -207,6 +207,8 @@ ScanResult scan_off(const std::string& path, std::string_view text) {
       double d;
       if (!to_double(tok[a], d)) fail_at(path, lines.line(), "vertex " + std::to_string(i) + ": bad coordinate " + shown(tok[a]));
       if (!finite_float(d)) fail_at(path, lines.line(), "vertex " + std::to_string(i) + " has a non-finite coordinate");
+      canonical.append(tok[a]);
+      canonical += a < 2 ? ' ' : '\n';
     }
   }
   ScanResult r;
@@ -226,6 +228,10 @@ ScanResult scan_off(const std::string& path, std::string_view text) {
         fail_at(path, lines.line(),
                 "face " + std::to_string(f) + ": vertex index " + std::to_string(idx) + " is outside [0, " + std::to_string(nv) + ")");
       corners.push_back(idx);
+    }
+    for (std::int64_t k = 0; k <= n; ++k) {
+      canonical.append(tok[static_cast<std::size_t>(k)]);
+      canonical += k < n ? ' ' : '\n';
     }
     ++r.faces;
     r.triangles += static_cast<std::size_t>(n - 2);
@@ -592,11 +598,12 @@ TriangleMesh load_mesh(const std::string& path, MeshLoadReport* report) {
   const Format format = format_of(path);
   if (format == Format::Unknown) fail(path, "unknown mesh format (expected .off, .obj, .ply or .stl)");
   ScanResult scan;
+  std::string canonical_off;
   {
     const std::string text = read_whole_file(path);
     if (text.empty()) fail(path, "empty file");
     switch (format) {
-      case Format::Off: scan = scan_off(path, text); break;
+      case Format::Off: scan = scan_off(path, text, canonical_off); break;
       case Format::Obj: scan = scan_obj(path, text); break;
       case Format::Ply: scan = scan_ply(path, text); break;
       case Format::Stl: scan = scan_stl(path, text); break;
@@ -610,7 +617,14 @@ TriangleMesh load_mesh(const std::string& path, MeshLoadReport* report) {
   {
     std::lock_guard lock(openmesh_mutex());
     OpenMesh::IO::Options opt;
-    if (!OpenMesh::IO::read_mesh(m, path, opt)) fail(path, "OpenMesh could not read the file");
+    bool ok;
+    if (format == Format::Off) {
+      std::istringstream in(std::move(canonical_off));
+      ok = OpenMesh::IO::read_mesh(m, in, ".off", opt);
+    } else {
+      ok = OpenMesh::IO::read_mesh(m, path, opt);
+    }
+    if (!ok) fail(path, "OpenMesh could not read the file");
   }
   MeshLoadReport local;
   local.faces_read = scan.faces;

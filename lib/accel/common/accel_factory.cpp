@@ -61,7 +61,8 @@ std::vector<AccelKind> make_registry() {
                    "Moller-Trumbore is not watertight: rays through shared edges and vertices may slip through "
                    "(bound: 50% of edge/vertex-aimed rays, 0.1% of others)"};
          return {0.0, 0.0, "exact agreement (" + k + " kernel)"};
-       }});
+       },
+       {"kernel=mt", "kernel=exact"}});
   kinds.push_back({"exact",
                    "the exact oracle: CGAL AABB-tree candidates, exact predicates, exact first-hit order",
                    {},
@@ -78,7 +79,8 @@ std::vector<AccelKind> make_registry() {
                      return {0.6, 1e-3,
                              "Embree's default intersector is not watertight: documented to miss rays aimed at "
                              "edges and vertices (bound: 60% of such rays, 0.1% of others)"};
-                   }});
+                   },
+                   {"quality=high"}});
   kinds.push_back({"embree-robust",
                    "Intel Embree 3 with RTC_SCENE_FLAG_ROBUST (watertight along edges)",
                    {{"quality", "medium", "rtcSetSceneBuildQuality: low | medium | high"}},

@@ -33,6 +33,8 @@ struct AccelKind {
   std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>, SpecReader&)> build;
   /// The accuracy the oracle suite holds this accelerator to, given its parameters.
   std::function<AccuracyBound(SpecReader&)> accuracy;
+  /// Parameter settings the oracle suite runs besides the defaults, e.g. {"kernel=mt"}.
+  std::vector<std::string> oracle_variants = {};
 };
 
 /// Every accelerator the lab knows, in listing order.

@@ -1,0 +1,98 @@
+#pragma once
+/// Shared plumbing of the experiment binaries: options (--mode quick|full, --out DIR), timing
+/// by repetition, CSV output, and the provenance every result page states.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "accel/common/tracer.h"
+#include "geometry/input_error.h"
+
+namespace raylab::experiments {
+
+struct Options {
+  std::string mode = "quick";  ///< quick: the default `./lab report`; full: `./lab report --full`
+  std::string out = "docs/results";
+  bool full() const { return mode == "full"; }
+};
+
+/// Parses the common options; exits with a one-line error on bad ones.
+inline Options parse_options(int argc, char** argv, const std::string& description) {
+  Options o;
+  CLI::App app{description};
+  app.add_option("--mode", o.mode, "quick | full")->check(CLI::IsMember({"quick", "full"}));
+  app.add_option("--out", o.out, "output directory for CSV and Markdown");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    std::exit(app.exit(e));
+  } catch (const CLI::ParseError& e) {
+    std::cerr << argv[0] << ": error: " << e.what() << "\n";
+    std::exit(2);
+  }
+  std::filesystem::create_directories(o.out);
+  return o;
+}
+
+/// Single-thread trace time per ray, in nanoseconds: the trace is repeated until at least
+/// `min_seconds` have been spent and the fastest repetition is kept.
+inline double ns_per_ray(const Primitive& accel, const std::vector<Ray>& rays, bool any_hit, double min_seconds = 0.2) {
+  double best = 1e300, spent = 0;
+  int reps = 0;
+  while (spent < min_seconds || reps < 2) {
+    const TraceResult r = trace_rays(accel, rays, TraceOptions{1, false, any_hit});
+    best = std::min(best, r.seconds);
+    spent += r.seconds;
+    ++reps;
+    if (reps >= 1000) break;
+  }
+  return best / static_cast<double>(rays.size()) * 1e9;
+}
+
+inline double seconds_of(const std::function<void()>& f) {
+  const auto start = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// A CSV file written row by row.
+class CsvWriter {
+ public:
+  CsvWriter(const std::string& path, const std::vector<std::string>& columns) : out_(path) {
+    if (!out_) throw InputError("cannot write " + path);
+    for (std::size_t i = 0; i < columns.size(); ++i) out_ << (i ? "," : "") << columns[i];
+    out_ << "\n";
+  }
+  template <class... T>
+  void row(const T&... values) {
+    std::size_t i = 0;
+    ((out_ << (i++ ? "," : "") << values), ...);
+    out_ << "\n";
+    out_.flush();
+  }
+
+ private:
+  std::ofstream out_;
+};
+
+/// One line naming the machine state the numbers were measured under.
+inline std::string provenance() {
+  std::string flags = "Release -O3";
+#ifdef __AVX512F__
+  flags += " -march=native (AVX-512)";
+#elif defined(__AVX2__)
+  flags += " -march=native (AVX2)";
+#endif
+  return flags + ", FTZ/DAZ on, " + std::to_string(resolve_thread_count(0)) + " hardware threads";
+}
+
+inline void progress(const std::string& line) { std::cerr << line << std::endl; }
+
+}  // namespace raylab::experiments

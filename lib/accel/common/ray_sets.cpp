@@ -1,0 +1,31 @@
+#include "accel/common/ray_sets.h"
+
+#include "accel/common/accel_factory.h"
+#include "geometry/spec_string.h"
+#include "rays/ray_generators.h"
+
+namespace raylab {
+
+std::vector<Ray> make_ray_set(const std::string& spec, const std::shared_ptr<const Scene>& scene) {
+  std::shared_ptr<Aggregate> tracer;  // built on first use: primary/lines/edges need none
+  FirstHitFunction first_hit = [&](const Ray& r) {
+    if (!tracer) tracer = make_accelerator("embree-robust", scene);
+    Ray ray = r;
+    Hit hit;
+    tracer->intersect(ray, hit);
+    return hit;
+  };
+  return generate_rays(spec, *scene, first_hit);
+}
+
+bool is_any_hit_ray_spec(const std::string& spec) {
+  const std::string name = parse_spec(spec).name;
+  return name == "shadow" || name == "ao";
+}
+
+bool is_feature_ray_spec(const std::string& spec) {
+  const std::string name = parse_spec(spec).name;
+  return name == "edges" || name == "vertices";
+}
+
+}  // namespace raylab

@@ -1,0 +1,111 @@
+#pragma once
+/// Procedural scenes for the lecture's cases and for scale. Every generator is deterministic:
+/// random ones draw from std::mt19937_64 seeded with `seed` (default 1). Coordinates: y is up.
+/// Parameter ranges are checked by the spec parser (scene_spec.cpp), which documents them in
+/// `scene_kinds()`; the functions here throw InputError for values outside the ranges below.
+#include <cstdint>
+#include <memory>
+
+#include "geometry/triangle_mesh.h"
+#include "scene/scene.h"
+
+namespace raylab {
+
+/// A UV sphere: `stacks` bands in latitude, `slices` in longitude, closed by a triangle fan
+/// at each pole; shared vertices, outward counter-clockwise winding, 2·slices·(stacks-1)
+/// triangles. stacks >= 2, slices >= 3.
+TriangleMesh uv_sphere(const Vec3f& center, float radius, int stacks, int slices);
+
+/// `sphere:n=N,radius=R` — a UV sphere of about N triangles (slices = 2·stacks), centred at the
+/// origin. n in [8, 2^27], default 5000; radius default 1.
+struct SphereConfig {
+  std::int64_t triangles = 5000;
+  double radius = 1.0;
+};
+Scene make_sphere(const SphereConfig& c);
+
+/// `sphereflake:depth=D,as=spheres|triangles,tess=T` — Haines' sphereflake from the Standard
+/// Procedural Databases (Haines, "A Proposal for Standard Graphics Environments", IEEE CG&A
+/// 7(11), 1987): a unit sphere at the origin carries nine spheres of a third of its radius
+/// (six around its equator, three above it, relative to the direction it grew from), each of
+/// which carries nine more, to `depth` levels: (9^(depth+1) - 1) / 8 spheres. depth in [0, 7],
+/// default 4 (7381 spheres, SPD's size factor 4). as=triangles tessellates every sphere as a UV
+/// sphere with `tess` stacks and 2·tess slices (tess in [2, 64], default 8: 224 triangles).
+struct SphereflakeConfig {
+  int depth = 4;
+  bool as_triangles = false;
+  int tess = 8;
+};
+Scene make_sphereflake(const SphereflakeConfig& c);
+
+/// `stadium:object=SPEC,ratio=R,segments=S,tiers=K` — the "teapot in a stadium" (Haines,
+/// "Ray Tracing News" 1990s; a small detailed object in a large sparse scene): a flat
+/// elliptical ground (a fan of `segments` triangles) ringed by `tiers` stepped stands (a tread
+/// and a riser per tier and segment, 4 triangles each), the field's length R times the object's
+/// bounding-box diagonal. The object (default `sphere:n=5000`) stands on the ground at one goal
+/// line. ratio in [1, 1e6], default 1000; segments in [8, 4096], default 96; tiers in [1, 256],
+/// default 8 (3168 stadium triangles). The object must not be instanced.
+struct StadiumConfig {
+  double ratio = 1000.0;
+  int segments = 96;
+  int tiers = 8;
+};
+Scene make_stadium(const Scene& object, const StadiumConfig& c);
+
+/// `grass:blades=N,height=H,width=W,seed=S` — N blades of identical size, each a tapered,
+/// leaning strip of 3 triangles, uniformly distributed (position and heading) on the unit
+/// square field [0,1]x[0,1] of the xz plane. blades in [1, 2^26], default 10000; height default
+/// 0.05; width default 0.004.
+struct GrassConfig {
+  std::int64_t blades = 10000;
+  double height = 0.05, width = 0.004;
+  std::uint64_t seed = 1;
+};
+Scene make_grass(const GrassConfig& c);
+
+/// `walls:n=N,angle=DEG,length=L,thickness=T,spacing=D` — N long thin walls (boxes of 12
+/// triangles, length L along x, height 1, thickness T) in parallel rows D apart, the rows laid
+/// out so the whole block is roughly square, then rotated by DEG degrees about the vertical
+/// axis through its centre (a rotation away from the axes defeats axis-aligned splits).
+/// n in [1, 2^24], default 100; angle in [-360, 360], default 30; length default 10;
+/// thickness default 0.05; spacing default 0.5.
+struct WallsConfig {
+  std::int64_t walls = 100;
+  double angle_degrees = 30.0, length = 10.0, thickness = 0.05, spacing = 0.5;
+};
+Scene make_walls(const WallsConfig& c);
+
+/// `soup:n=N,size=S,seed=K` — N independent random triangles inside the unit cube: each has a
+/// uniform random centre and corners offset from it uniformly in [-S/2, S/2]^3 (clamped to the
+/// cube). n in [1, 2^27], default 10000; size default 0 = N^(-1/3) (about one cell of an
+/// N-cell grid).
+struct SoupConfig {
+  std::int64_t triangles = 10000;
+  double size = 0.0;
+  std::uint64_t seed = 1;
+};
+Scene make_soup(const SoupConfig& c);
+
+/// `subdivided:of=SPEC,levels=K` — Loop subdivision (Loop, "Smooth Subdivision Surfaces Based
+/// on Triangles", MSc thesis, Utah 1987) of a triangle scene via OpenMesh's LoopT; each level
+/// multiplies the triangle count by 4. levels in [0, 10], default 1; refused when the result
+/// would exceed 2^27 triangles or the scene has spheres or instances.
+Scene make_subdivided(const Scene& of, int levels);
+
+/// `decimated:of=SPEC,faces=N` — quadric-error edge-collapse decimation (Garland & Heckbert,
+/// "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997) via OpenMesh's
+/// DecimaterT + ModQuadricT, down to about N faces (a mesh already at most N is kept).
+/// faces in [1, 2^27], default 1000; triangles only.
+Scene make_decimated(const Scene& of, std::int64_t faces);
+
+/// `instances:of=SPEC,count=N,seed=S` — N copies of a base scene on a cubic grid (spacing 1.5
+/// times the base's bounding-box diagonal), each turned by a small deterministic random
+/// rotation (up to 15 degrees about a random axis). Only the transforms are stored, so N up to
+/// 10^9 is allowed. The base must be non-empty and not itself instanced.
+struct InstancesConfig {
+  std::int64_t count = 1000;
+  std::uint64_t seed = 1;
+};
+Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c);
+
+}  // namespace raylab

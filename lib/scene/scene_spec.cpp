@@ -1,0 +1,191 @@
+#include "scene/scene_spec.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+#include "geometry/input_error.h"
+#include "scene/cgal_meshes.h"
+#include "scene/mesh_io.h"
+#include "scene/procedural.h"
+
+namespace raylab {
+namespace {
+
+constexpr std::int64_t kMaxSeed = std::numeric_limits<std::int64_t>::max();
+
+const SceneKindDoc& kind(const std::string& name) {
+  for (const auto& k : scene_kinds())
+    if (k.name == name) return k;
+  throw InputError("internal: no scene kind " + name);
+}
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+std::string kind_list() {
+  std::string out;
+  for (const auto& k : scene_kinds()) out += (out.empty() ? "" : ", ") + k.name;
+  return out;
+}
+
+bool is_kind(const std::string& name) {
+  const auto& kinds = scene_kinds();
+  return std::any_of(kinds.begin(), kinds.end(), [&](const SceneKindDoc& k) { return k.name == name; });
+}
+
+/// The one positional argument of `cgal:NAME` / `file:PATH`, with no key=value items.
+std::string single_argument(const SpecString& spec, const std::string& what) {
+  if (spec.positional.size() != 1) throw InputError("spec " + quoted(spec.text) + ": expected " + spec.name + ":" + what);
+  SpecString rest = spec;
+  rest.positional.clear();
+  SpecReader(rest).finish(kind(spec.name).params);
+  return spec.positional.front();
+}
+
+std::shared_ptr<Scene> mesh_scene(const std::string& path) {
+  auto s = std::make_shared<Scene>();
+  s->mesh = load_mesh(path);
+  return s;
+}
+
+std::shared_ptr<Scene> build(const std::string& text) {
+  const std::string head = text.substr(0, text.find(':'));
+  if (has_mesh_extension(text) && !is_kind(head)) return mesh_scene(text);
+
+  const SpecString spec = parse_spec(text);
+  const std::string& name = spec.name;
+  if (name == "cgal") return mesh_scene(cgal_mesh_path(single_argument(spec, "NAME")));
+  if (name == "file") return mesh_scene(single_argument(spec, "PATH"));
+  if (!is_kind(name))
+    throw InputError("spec " + quoted(text) + ": unknown scene kind " + quoted(name) + " (valid: " + kind_list() +
+                     ", or a path ending in .off/.obj/.ply/.stl)");
+
+  SpecReader r(spec);
+  const auto& params = kind(name).params;
+  auto scene = std::make_shared<Scene>();
+  if (name == "sphere") {
+    SphereConfig c;
+    c.triangles = r.get_int("n", c.triangles, 8, std::int64_t{1} << 27);
+    c.radius = r.get_double("radius", c.radius, 1e-30, 1e30);
+    r.finish(params);
+    *scene = make_sphere(c);
+  } else if (name == "sphereflake") {
+    SphereflakeConfig c;
+    c.depth = static_cast<int>(r.get_int("depth", c.depth, 0, 7));
+    c.as_triangles = r.get_choice("as", "spheres", {"spheres", "triangles"}) == "triangles";
+    c.tess = static_cast<int>(r.get_int("tess", c.tess, 2, 64));
+    r.finish(params);
+    *scene = make_sphereflake(c);
+  } else if (name == "stadium") {
+    StadiumConfig c;
+    const std::string object = r.get_string("object", "sphere:n=5000");
+    c.ratio = r.get_double("ratio", c.ratio, 1, 1e6);
+    c.segments = static_cast<int>(r.get_int("segments", c.segments, 8, 4096));
+    c.tiers = static_cast<int>(r.get_int("tiers", c.tiers, 1, 256));
+    r.finish(params);
+    *scene = make_stadium(*make_scene(object), c);
+  } else if (name == "grass") {
+    GrassConfig c;
+    c.blades = r.get_int("blades", c.blades, 1, std::int64_t{1} << 26);
+    c.height = r.get_double("height", c.height, 1e-9, 1e3);
+    c.width = r.get_double("width", c.width, 1e-9, 1e3);
+    c.seed = static_cast<std::uint64_t>(r.get_int("seed", 1, 0, kMaxSeed));
+    r.finish(params);
+    *scene = make_grass(c);
+  } else if (name == "walls") {
+    WallsConfig c;
+    c.walls = r.get_int("n", c.walls, 1, std::int64_t{1} << 24);
+    c.angle_degrees = r.get_double("angle", c.angle_degrees, -360, 360);
+    c.length = r.get_double("length", c.length, 1e-6, 1e6);
+    c.thickness = r.get_double("thickness", c.thickness, 1e-9, 1e6);
+    c.spacing = r.get_double("spacing", c.spacing, 1e-9, 1e6);
+    r.finish(params);
+    *scene = make_walls(c);
+  } else if (name == "soup") {
+    SoupConfig c;
+    c.triangles = r.get_int("n", c.triangles, 1, std::int64_t{1} << 27);
+    c.size = r.get_double("size", c.size, 0, 1);
+    c.seed = static_cast<std::uint64_t>(r.get_int("seed", 1, 0, kMaxSeed));
+    r.finish(params);
+    *scene = make_soup(c);
+  } else if (name == "subdivided") {
+    const std::string of = r.get_string("of", "cgal:bunny00");
+    const int levels = static_cast<int>(r.get_int("levels", 1, 0, 10));
+    r.finish(params);
+    *scene = make_subdivided(*make_scene(of), levels);
+  } else if (name == "decimated") {
+    const std::string of = r.get_string("of", "cgal:bunny00");
+    const std::int64_t faces = r.get_int("faces", 1000, 1, std::int64_t{1} << 27);
+    r.finish(params);
+    *scene = make_decimated(*make_scene(of), faces);
+  } else if (name == "instances") {
+    InstancesConfig c;
+    const std::string of = r.get_string("of", "cgal:bunny00");
+    c.count = r.get_int("count", c.count, 1, 1000000000);
+    c.seed = static_cast<std::uint64_t>(r.get_int("seed", 1, 0, kMaxSeed));
+    r.finish(params);
+    *scene = make_instances(make_scene(of), c);
+  }
+  return scene;
+}
+
+}  // namespace
+
+std::shared_ptr<const Scene> make_scene(const std::string& spec) {
+  std::shared_ptr<Scene> scene;
+  try {
+    scene = build(spec);
+  } catch (const InputError& e) {
+    // Errors of the generators name only the kind; prefix the spec unless the message names it.
+    const std::string msg = e.what();
+    if (msg.find(spec) != std::string::npos) throw;
+    throw InputError("spec " + quoted(spec) + ": " + msg);
+  }
+  scene->spec = spec;
+  if (scene->total_primitive_count() == 0) throw InputError("spec " + quoted(spec) + ": the scene is empty");
+  return scene;
+}
+
+const std::vector<SceneKindDoc>& scene_kinds() {
+  static const std::vector<SceneKindDoc> kinds = {
+      {"cgal", "a CGAL demo mesh by name: cgal:bunny00 (see cgal_mesh_names())", {}},
+      {"file", "a mesh file (.off .obj .ply .stl): file:PATH, or just PATH", {}},
+      {"sphere", "a UV sphere with pole fans (closed)",
+       {{"n", "5000", "about this many triangles, in [8, 2^27]"}, {"radius", "1", "radius"}}},
+      {"sphereflake", "Haines' SPD sphereflake: 9 children of radius 1/3 per sphere, recursively",
+       {{"depth", "4", "levels of children, in [0, 7]: (9^(depth+1)-1)/8 spheres"},
+        {"as", "spheres", "spheres | triangles"},
+        {"tess", "8", "with as=triangles: UV-sphere stacks (2*tess slices), in [2, 64]"}}},
+      {"stadium", "teapot in a stadium: a small object at the goal line of a large sparse stadium",
+       {{"object", "sphere:n=5000", "the object's scene spec (parenthesise nested specs)"},
+        {"ratio", "1000", "field length over the object's bounding-box diagonal, in [1, 1e6]"},
+        {"segments", "96", "segments around the stadium, in [8, 4096]"},
+        {"tiers", "8", "tiers of stands, in [1, 256]"}}},
+      {"grass", "thin blades (3 triangles each) uniformly on the unit square",
+       {{"blades", "10000", "number of blades, in [1, 2^26]"},
+        {"height", "0.05", "blade height"},
+        {"width", "0.004", "blade width at the base"},
+        {"seed", "1", "random seed"}}},
+      {"walls", "long thin walls (boxes of 12 triangles) in parallel rows, rotated about y",
+       {{"n", "100", "number of walls, in [1, 2^24]"},
+        {"angle", "30", "rotation about the vertical axis in degrees, in [-360, 360]"},
+        {"length", "10", "wall length"},
+        {"thickness", "0.05", "wall thickness"},
+        {"spacing", "0.5", "distance between rows"}}},
+      {"soup", "independent random triangles in the unit cube",
+       {{"n", "10000", "number of triangles, in [1, 2^27]"},
+        {"size", "0", "triangle size; 0 = n^(-1/3)"},
+        {"seed", "1", "random seed"}}},
+      {"subdivided", "Loop subdivision (OpenMesh) of a triangle scene",
+       {{"of", "cgal:bunny00", "the scene to subdivide"}, {"levels", "1", "levels (x4 triangles each), in [0, 10]"}}},
+      {"decimated", "quadric decimation (OpenMesh) of a triangle scene",
+       {{"of", "cgal:bunny00", "the scene to decimate"}, {"faces", "1000", "target triangle count, in [1, 2^27]"}}},
+      {"instances", "copies of a scene on a grid, each slightly rotated (transforms only)",
+       {{"of", "cgal:bunny00", "the base scene"},
+        {"count", "1000", "number of instances, in [1, 10^9]"},
+        {"seed", "1", "random seed of the rotations"}}},
+  };
+  return kinds;
+}
+
+}  // namespace raylab

@@ -1,0 +1,150 @@
+// The one parameterised oracle suite (after CGAL's AABB_tree Tree_vs_naive and Embree's verify):
+// every accelerator the factory knows, with its default parameters and its listed variants,
+// against the exact oracle on random, procedural and degenerate scenes, with rays of every
+// generator. Agreement is counted as `raylab trace --check exact` counts it
+// (accel/common/hit_comparison.h), and each accelerator is held to its own stated AccuracyBound.
+// An accelerator registered in the factory later is run here without any change to this file.
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/hit_comparison.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+/// Scenes: random soups, closed meshes, spheres, the lecture's procedural cases, instances, a
+/// real CGAL mesh, and `degenerate`, built by hand below.
+const std::vector<std::string> kScenes = {
+    "soup:n=3000",
+    "sphere:n=2000",
+    "sphereflake:depth=2",
+    "sphereflake:depth=1,as=triangles",
+    "grass:blades=400",
+    "walls:n=12,angle=30",
+    "stadium:object=(sphere:n=800),ratio=50",
+    "instances:of=(sphere:n=400),count=6",
+    "decimated:of=cgal:bunny00,faces=4000",
+    "degenerate",
+};
+
+const std::vector<std::string> kRaySpecs = {"primary:4096", "diffuse:2048", "shadow:2048",
+                                            "lines:4096",   "edges:2048",   "vertices:2048"};
+
+/// Shared edges and vertices, a zero-area triangle, a repeated-vertex triangle, duplicated
+/// and coplanar overlapping triangles, a fan of high valence, and identical bounds.
+std::shared_ptr<const Scene> degenerate_scene() {
+  auto s = std::make_shared<Scene>();
+  s->spec = "degenerate";
+  auto& m = s->mesh;
+  auto add = [&](Vec3f a, Vec3f b, Vec3f c) {
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), {a, b, c});
+    m.triangles.push_back({base, base + 1, base + 2});
+  };
+  add({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  add({1, 0, 0}, {1, 1, 0}, {0, 1, 0});  // shares the diagonal edge
+  add({0, 0, 0}, {1, 0, 0}, {0, 1, 0});  // duplicate
+  add({0.25f, 0.25f, 0}, {2, 0.25f, 0}, {0.25f, 2, 0});  // coplanar, overlapping
+  add({0, 0, 1}, {1, 1, 1}, {2, 2, 1});  // collinear: zero area
+  add({0, 0, 2}, {0, 0, 2}, {1, 0, 2});  // repeated vertex
+  const int fan = 64;                    // high-valence fan around (3, 0.5, 0.5)
+  for (int i = 0; i < fan; ++i) {
+    const double a0 = 2 * M_PI * i / fan, a1 = 2 * M_PI * (i + 1) / fan;
+    add({3, 0.5f, 0.5f}, {3 + 0.5f * float(std::cos(a0)), 0.5f + 0.5f * float(std::sin(a0)), 0.3f},
+        {3 + 0.5f * float(std::cos(a1)), 0.5f + 0.5f * float(std::sin(a1)), 0.3f});
+  }
+  return s;
+}
+
+std::shared_ptr<const Scene> scene_for(const std::string& spec) {
+  static std::map<std::string, std::shared_ptr<const Scene>> cache;
+  auto& s = cache[spec];
+  if (!s) s = spec == "degenerate" ? degenerate_scene() : make_scene(spec);
+  return s;
+}
+
+struct Reference {
+  std::vector<Ray> rays;
+  TraceResult exact;
+};
+
+const Reference& reference_for(const std::string& scene_spec, const std::string& ray_spec) {
+  static std::map<std::pair<std::string, std::string>, Reference> cache;
+  auto key = std::make_pair(scene_spec, ray_spec);
+  auto it = cache.find(key);
+  if (it != cache.end()) return it->second;
+  Reference ref;
+  const auto scene = scene_for(scene_spec);
+  ref.rays = make_ray_set(ray_spec, scene);
+  const auto oracle = make_accelerator("exact", scene);
+  ref.exact = trace_rays(*oracle, ref.rays, TraceOptions{0, false, is_any_hit_ray_spec(ray_spec)});
+  return cache.emplace(key, std::move(ref)).first->second;
+}
+
+/// Feature-aimed rays need a mesh of the scene's own (not instanced, not spheres only).
+bool applicable(const std::string& scene_spec, const std::string& ray_spec) {
+  if (!is_feature_ray_spec(ray_spec)) return true;
+  const auto scene = scene_for(scene_spec);
+  return !scene->instanced() && scene->mesh.size() > 0;
+}
+
+std::vector<std::string> all_accel_specs() {
+  std::vector<std::string> specs;
+  for (const auto& kind : accelerator_kinds()) {
+    specs.push_back(kind.name);
+    for (const auto& v : kind.oracle_variants) specs.push_back(kind.name + ":" + v);
+  }
+  return specs;
+}
+
+using OracleParam = std::tuple<std::string, std::string>;  // accelerator spec, scene spec
+
+class OracleSuite : public ::testing::TestWithParam<OracleParam> {};
+
+TEST_P(OracleSuite, AgreesWithTheExactOracleWithinItsStatedBound) {
+  const auto& [accel_spec, scene_spec] = GetParam();
+  const auto scene = scene_for(scene_spec);
+  const auto accel = make_accelerator(accel_spec, scene);
+  const AccuracyBound bound = accuracy_bound(accel_spec);
+  const double diagonal = length(Vec3d(scene->bounds().diagonal()));
+  for (const auto& ray_spec : kRaySpecs) {
+    if (!applicable(scene_spec, ray_spec)) continue;
+    const Reference& ref = reference_for(scene_spec, ray_spec);
+    const bool any_hit = is_any_hit_ray_spec(ray_spec);
+    const TraceResult got = trace_rays(*accel, ref.rays, TraceOptions{0, false, any_hit});
+    const HitComparison c = any_hit ? compare_occlusion(got.blocked, ref.exact.blocked)
+                                    : compare_hits(ref.rays, got.hits, ref.exact.hits, diagonal);
+    const double allowed =
+        is_feature_ray_spec(ray_spec) ? bound.max_mismatch_rate_features : bound.max_mismatch_rate_other;
+    const auto allowed_count = static_cast<std::size_t>(std::floor(allowed * static_cast<double>(c.rays)));
+    EXPECT_LE(c.mismatches, allowed_count)
+        << accel_spec << " on " << scene_spec << " with " << ray_spec << ": " << c.false_hits << " false hits, "
+        << c.missed_hits << " missed, " << c.wrong_t << " wrong t, " << c.ties << " ties of " << c.rays
+        << " rays (bound: " << bound.statement << "); first mismatching ray "
+        << (c.first_mismatches.empty() ? -1 : static_cast<long>(c.first_mismatches[0]));
+    // The reference itself must see something, or the comparison proves nothing.
+    EXPECT_GT(any_hit ? std::count(ref.exact.blocked.begin(), ref.exact.blocked.end(), 1)
+                      : std::count_if(ref.exact.hits.begin(), ref.exact.hits.end(), [](const Hit& h) { return h.valid(); }),
+              0)
+        << ray_spec << " on " << scene_spec;
+  }
+}
+
+std::string param_name(const ::testing::TestParamInfo<OracleParam>& info) {
+  std::string s = std::get<0>(info.param) + "__" + std::get<1>(info.param);
+  for (char& ch : s)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return s;
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryAccelerator, OracleSuite,
+                         ::testing::Combine(::testing::ValuesIn(all_accel_specs()), ::testing::ValuesIn(kScenes)),
+                         param_name);
+
+}  // namespace
+}  // namespace raylab

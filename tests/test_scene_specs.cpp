@@ -1,0 +1,196 @@
+// Scene specs: every procedural scene with small parameters, mesh specs, and spec errors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "geometry/input_error.h"
+#include "scene/procedural.h"
+#include "scene/scene.h"
+#include "scene/scene_spec.h"
+
+using namespace raylab;
+
+namespace {
+
+const std::string kData = RAYLAB_TEST_DATA;
+
+/// Six times the signed volume enclosed by a closed mesh (positive when it faces outward).
+double signed_volume6(const TriangleMesh& m) {
+  double v = 0;
+  for (std::size_t t = 0; t < m.size(); ++t)
+    v += dot(Vec3d(m.vertex(t, 0)), cross(Vec3d(m.vertex(t, 1)), Vec3d(m.vertex(t, 2))));
+  return v;
+}
+
+bool inside(const Bounds3f& inner, const Bounds3f& outer) { return outer.contains(inner.lo) && outer.contains(inner.hi); }
+
+}  // namespace
+
+TEST(SceneSpecs, SphereIsClosedAndOutward) {
+  for (const char* spec : {"sphere:n=8", "sphere:n=100", "sphere", "sphere:n=20000,radius=3"}) {
+    SCOPED_TRACE(spec);
+    const auto s = make_scene(spec);
+    EXPECT_EQ(s->spec, spec);
+    const SceneInfo info = describe(*s);
+    EXPECT_TRUE(info.closed);
+    EXPECT_EQ(info.degenerate_triangles, 0u);
+    EXPECT_GT(signed_volume6(s->mesh), 0.0);
+  }
+  EXPECT_EQ(make_scene("sphere:n=8")->triangle_count(), 8u);
+  const auto s = make_scene("sphere:n=5000");
+  EXPECT_NEAR(static_cast<double>(s->triangle_count()), 5000.0, 200.0);
+  EXPECT_NEAR(s->bounds().hi.y, 1.0f, 1e-6f);
+  EXPECT_NEAR(s->bounds().lo.y, -1.0f, 1e-6f);
+}
+
+TEST(SceneSpecs, Sphereflake) {
+  const auto s = make_scene("sphereflake:depth=2");
+  EXPECT_EQ(s->spheres.size(), 91u);
+  EXPECT_EQ(s->triangle_count(), 0u);
+  EXPECT_TRUE(describe(*s).closed);
+  EXPECT_EQ(make_scene("sphereflake:depth=0")->spheres.size(), 1u);
+  EXPECT_EQ(make_scene("sphereflake")->spheres.size(), 7381u);
+  // Children touch their parent and have a third of its radius.
+  EXPECT_FLOAT_EQ(s->spheres[1].radius, 1.0f / 3.0f);
+  EXPECT_NEAR(length(s->spheres[1].center - s->spheres[0].center), 4.0 / 3.0, 1e-6);
+  const auto t = make_scene("sphereflake:depth=2,as=triangles,tess=4");
+  EXPECT_EQ(t->triangle_count(), 91u * 2 * 8 * 3);
+  EXPECT_TRUE(t->spheres.empty());
+  EXPECT_TRUE(inside(t->bounds(), s->bounds()));
+}
+
+TEST(SceneSpecs, StadiumHoldsTheObjectAtItsScale) {
+  const auto obj = make_scene("sphereflake:depth=1");
+  const auto s = make_scene("stadium:object=(sphereflake:depth=1),ratio=100");
+  EXPECT_EQ(s->spheres.size(), 10u);
+  EXPECT_EQ(s->triangle_count(), 96u * (1 + 4 * 8));
+  const double obj_diag = length(Vec3d(obj->bounds().diagonal()));
+  const double diag = length(Vec3d(s->bounds().diagonal()));
+  EXPECT_GT(diag, 100 * obj_diag);
+  EXPECT_LT(diag, 200 * obj_diag);
+  // The object keeps its coordinates.
+  EXPECT_EQ(s->spheres[0].center, obj->spheres[0].center);
+  EXPECT_EQ(make_scene("stadium:ratio=10,segments=16,tiers=2")->triangle_count(), make_scene("sphere:n=5000")->triangle_count() + 16u * 9);
+}
+
+TEST(SceneSpecs, Grass) {
+  const auto s = make_scene("grass:blades=200,height=0.1");
+  EXPECT_EQ(s->triangle_count(), 600u);
+  const Bounds3f b = s->bounds();
+  EXPECT_GE(b.lo.y, 0.0f);
+  EXPECT_LE(b.hi.y, 0.1f + 1e-6f);
+  EXPECT_GT(b.lo.x, -0.1f);
+  EXPECT_LT(b.hi.x, 1.1f);
+  EXPECT_EQ(describe(*s).degenerate_triangles, 0u);
+}
+
+TEST(SceneSpecs, Walls) {
+  const auto s = make_scene("walls:n=10,angle=0");
+  EXPECT_EQ(s->triangle_count(), 120u);
+  EXPECT_TRUE(describe(*s).closed);
+  const auto r = make_scene("walls:n=10,angle=45");
+  EXPECT_TRUE(describe(*r).closed);
+  EXPECT_GT(signed_volume6(r->mesh), 0.0);
+  EXPECT_NEAR(r->bounds().hi.y, 1.0f, 1e-6f);
+  EXPECT_NEAR(r->bounds().lo.y, 0.0f, 1e-6f);
+}
+
+TEST(SceneSpecs, SoupIsDeterministic) {
+  const auto a = make_scene("soup:n=1000");
+  const auto b = make_scene("soup:n=1000,seed=1");
+  const auto c = make_scene("soup:n=1000,seed=2");
+  EXPECT_EQ(a->triangle_count(), 1000u);
+  EXPECT_TRUE(inside(a->bounds(), Bounds3f(Vec3f(0.0f), Vec3f(1.0f))));
+  EXPECT_TRUE(a->mesh.vertices == b->mesh.vertices);
+  EXPECT_FALSE(a->mesh.vertices == c->mesh.vertices);
+}
+
+TEST(SceneSpecs, InstancesStoreOnlyTransforms) {
+  const auto s = make_scene("instances:of=(sphere:n=100),count=27");
+  ASSERT_TRUE(s->instanced());
+  EXPECT_EQ(s->instances.size(), 27u);
+  const SceneInfo info = describe(*s);
+  EXPECT_EQ(info.instances, 27u);
+  EXPECT_EQ(info.triangles, 27u * s->base->triangle_count());
+  EXPECT_TRUE(info.closed);
+  EXPECT_DOUBLE_EQ(info.primitives, 27.0 * static_cast<double>(s->base->triangle_count()));
+  EXPECT_THROW(make_scene("instances:of=(instances:of=(sphere:n=100),count=2),count=2"), InputError);
+  EXPECT_THROW(make_scene("instances:of=(sphere:n=100),count=1000000001"), InputError);
+}
+
+TEST(SceneSpecs, Subdivided) {
+  const auto base = make_scene("sphere:n=100");
+  const auto s = make_scene("subdivided:of=(sphere:n=100),levels=2");
+  EXPECT_EQ(s->triangle_count(), 16 * base->triangle_count());
+  EXPECT_TRUE(describe(*s).closed);
+  EXPECT_THROW(make_scene("subdivided:of=(sphereflake:depth=1),levels=1"), InputError);
+  EXPECT_THROW(make_scene("subdivided:of=(soup:n=100000),levels=8"), InputError);  // > 2^27 triangles
+}
+
+TEST(SceneSpecs, Decimated) {
+  const auto s = make_scene("decimated:of=(sphere:n=5000),faces=500");
+  EXPECT_LE(s->triangle_count(), 500u);
+  EXPECT_GT(s->triangle_count(), 100u);
+  EXPECT_TRUE(describe(*s).closed);
+}
+
+TEST(SceneSpecs, MeshFiles) {
+  const std::string path = kData + "/meshes/cube_quads.off";
+  EXPECT_EQ(make_scene(path)->triangle_count(), 12u);
+  EXPECT_EQ(make_scene("file:" + path)->triangle_count(), 12u);
+  EXPECT_EQ(make_scene("file:(" + path + ")")->triangle_count(), 12u);
+  EXPECT_EQ(make_scene("subdivided:of=" + path + ",levels=1")->triangle_count(), 48u);
+  const auto bunny = make_scene("cgal:bunny00");
+  EXPECT_GT(bunny->triangle_count(), 30000u);
+  EXPECT_EQ(bunny->spec, "cgal:bunny00");
+}
+
+TEST(SceneSpecs, ErrorsAreInputErrors) {
+  for (const char* spec : {"", "teapot", "teapot:n=3", "sphere:m=4", "sphere:n=abc", "sphere:n=3", "sphere:n=1e99",
+                           "sphereflake:depth=8", "sphereflake:as=cubes", "stadium:object=(sphere:n=100", "grass:blades=0",
+                           "walls:angle=nan", "soup:n=-1", "cgal:no_such_mesh", "cgal", "cgal:a,b", "cgal:bunny00,x=1",
+                           "file:/no/such/file.off", "/no/such/file.ply", "instances:of=(sphere:n=100),count=0",
+                           "stadium:object=(sphere:n=100),ratio=0", "sphere:5"}) {
+    SCOPED_TRACE(spec);
+    EXPECT_THROW(make_scene(spec), InputError);
+  }
+}
+
+TEST(SceneSpecs, UnknownKindListsTheValidOnes) {
+  try {
+    make_scene("teapot:n=3");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("teapot"), std::string::npos);
+    EXPECT_NE(msg.find("sphereflake"), std::string::npos);
+  }
+  try {
+    make_scene("sphere:m=4");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("radius"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneSpecs, KindsAreDocumented) {
+  const auto& kinds = scene_kinds();
+  for (const char* name : {"cgal", "file", "sphere", "sphereflake", "stadium", "grass", "walls", "soup", "subdivided",
+                           "decimated", "instances"}) {
+    const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const SceneKindDoc& k) { return k.name == name; });
+    ASSERT_NE(it, kinds.end()) << name;
+    EXPECT_FALSE(it->summary.empty());
+    for (const auto& p : it->params) EXPECT_FALSE(p.description.empty()) << name << ":" << p.key;
+  }
+}
+
+TEST(SceneSpecs, UvSphereCounts) {
+  const TriangleMesh m = uv_sphere(Vec3f(1, 2, 3), 0.5f, 5, 7);
+  EXPECT_EQ(m.size(), 2u * 7 * 4);
+  EXPECT_EQ(m.vertices.size(), 2u + 4 * 7);
+  Scene s;
+  s.mesh = m;
+  EXPECT_TRUE(describe(s).closed);
+}
