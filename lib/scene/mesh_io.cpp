@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -261,6 +262,8 @@ ScanResult scan_obj(const std::string& path, std::string_view text) {
   std::vector<std::int64_t> corners;
   while (lines.next(tok)) {
     const std::string_view key = tok[0];
+    if (!std::all_of(key.begin(), key.end(), [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_'; }))
+      fail_at(path, lines.line(), "not an OBJ statement: " + shown(key));
     if (key == "v") {
       if (tok.size() < 4) fail_at(path, lines.line(), "vertex " + std::to_string(nv) + ": expected 3 coordinates");
       for (int a = 1; a <= 3; ++a) {
@@ -334,11 +337,13 @@ class BinaryReader {
  public:
   BinaryReader(std::string_view data, std::size_t pos, bool big_endian) : data_(data), pos_(pos), big_(big_endian) {}
   bool read(int size, char kind, double& out) {
+    if (size != 1 && size != 2 && size != 4 && size != 8) return false;
     if (pos_ + static_cast<std::size_t>(size) > data_.size()) return false;
     unsigned char b[8];
     std::memcpy(b, data_.data() + pos_, static_cast<std::size_t>(size));
     pos_ += static_cast<std::size_t>(size);
-    if (big_ != (std::endian::native == std::endian::big)) std::reverse(b, b + size);
+    if (big_ != (std::endian::native == std::endian::big))
+      for (int i = 0, j = size - 1; i < j; ++i, --j) std::swap(b[i], b[j]);
     switch (size * 4 + (kind == 'f' ? 2 : kind == 'i' ? 1 : 0)) {
       case 4: out = b[0]; break;
       case 5: out = static_cast<std::int8_t>(b[0]); break;
@@ -364,7 +369,7 @@ ScanResult scan_ply(const std::string& path, std::string_view text) {
   LineReader lines(text, false);
   std::vector<std::string_view> tok;
   if (!lines.next(tok) || tok[0] != "ply") fail(path, "not a PLY file (no 'ply' magic on the first line)");
-  if (!lines.next(tok) || tok[0] != "format" || tok.size() < 2) fail_at(path, lines.line(), "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+  if (!lines.next(tok) || tok[0] != "format" || tok.size() != 3 || tok[2] != "1.0") fail_at(path, lines.line(), "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
   const std::string_view fmt = tok[1];
   if (fmt != "ascii" && fmt != "binary_little_endian" && fmt != "binary_big_endian")
     fail_at(path, lines.line(), "unknown PLY format " + shown(fmt));
