@@ -66,20 +66,16 @@ std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std
   starts.push_back(inc.size());
   const std::size_t features = starts.size() - 1;
 
+  // Per feature: the mean normal and the cone half-angle. A feature where some adjacent face
+  // is 80° or more from the mean normal (a fold, or a fin whose faces point apart) has no
+  // direction that crosses every adjacent face from the front with a margin: it is seen in
+  // silhouette from every side, so it is not sampled while any other feature is eligible.
   const double max_cone = 30.0 * std::numbers::pi / 180.0;
-  Rng rng(seed);
-  std::vector<Ray> rays;
-  rays.reserve(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t f = rng.below(features);
-    const std::uint64_t key = inc[starts[f]].feature;
-    Vec3d p;
-    if (feature == MeshFeature::vertex) {
-      p = Vec3d(mesh.vertices[key]);
-    } else {
-      const Vec3d a(mesh.vertices[key >> 32]), b(mesh.vertices[key & 0xffffffffu]);
-      p = Vec3d(Vec3f(a + (b - a) * rng.uniform_open()));
-    }
+  const double max_theta = 80.0 * std::numbers::pi / 180.0;
+  std::vector<Vec3d> normals(features);
+  std::vector<double> cones(features);
+  std::vector<std::size_t> eligible;
+  for (std::size_t f = 0; f < features; ++f) {
     Vec3d normal(0.0);
     for (std::size_t i = starts[f]; i < starts[f + 1]; ++i) normal += face_cross(mesh, inc[i].tri);
     if (!(length(normal) > 0.0)) normal = face_cross(mesh, inc[starts[f]].tri);
@@ -88,9 +84,28 @@ std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std
     for (std::size_t i = starts[f]; i < starts[f + 1]; ++i)
       min_cos = std::min(min_cos, dot(normal, normalize(face_cross(mesh, inc[i].tri))));
     const double theta = std::acos(std::clamp(min_cos, -1.0, 1.0));
-    const double cone = std::clamp(0.5 * (0.5 * std::numbers::pi - theta), 0.0, max_cone);
+    normals[f] = normal;
+    cones[f] = std::clamp(0.5 * (0.5 * std::numbers::pi - theta), 0.0, max_cone);
+    if (theta <= max_theta) eligible.push_back(f);
+  }
+  if (eligible.empty())
+    for (std::size_t f = 0; f < features; ++f) eligible.push_back(f);
+
+  Rng rng(seed);
+  std::vector<Ray> rays;
+  rays.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t f = eligible[rng.below(eligible.size())];
+    const std::uint64_t key = inc[starts[f]].feature;
+    Vec3d p;
+    if (feature == MeshFeature::vertex) {
+      p = Vec3d(mesh.vertices[key]);
+    } else {
+      const Vec3d a(mesh.vertices[key >> 32]), b(mesh.vertices[key & 0xffffffffu]);
+      p = Vec3d(Vec3f(a + (b - a) * rng.uniform_open()));
+    }
     const double u1 = rng.uniform(), u2 = rng.uniform();
-    const Vec3d w = Frame(-normal).to_world(sample_uniform_cone(u1, u2, std::cos(cone)));
+    const Vec3d w = Frame(-normals[f]).to_world(sample_uniform_cone(u1, u2, std::cos(cones[f])));
     const Vec3f org(p - w * distance);
     Vec3f dir(p - Vec3d(org));
     if (dir == Vec3f(0.0f)) dir = Vec3f(w);

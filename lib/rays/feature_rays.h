@@ -29,7 +29,9 @@ enum class MeshFeature { edge, vertex };
 /// (on the edge up to that rounding). n is the area-weighted mean normal of the adjacent
 /// triangles (any adjacent face normal if the mean is zero). The direction w is uniform in the
 /// cone about −n of half-angle min(30°, (90° − θ)/2), θ the largest angle between n and an
-/// adjacent face normal, so the ray never grazes an adjacent face. The origin is
+/// adjacent face normal, so the ray never grazes an adjacent face. Features with θ > 80° (folds
+/// and fins, seen in silhouette from every direction) are skipped unless every feature is one.
+/// The origin is
 /// o = p − δ·w, δ = `distance`, rounded to float; the direction is p − o in double, rounded;
 /// tmin = 0, tmax = inf. Deterministic for a given seed.
 std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std::size_t n, double distance,

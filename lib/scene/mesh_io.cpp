@@ -651,7 +651,8 @@ void save_mesh(const TriangleMesh& mesh, const std::string& path, bool binary) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
     if (!m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]).is_valid()) {
       // A non-manifold triangle keeps its geometry on duplicated corners (as OpenMesh's importer does).
-      m.add_face(m.add_vertex(m.point(vh[t[0]])), m.add_vertex(m.point(vh[t[1]])), m.add_vertex(m.point(vh[t[2]])));
+      const TriMesh::Point p0 = m.point(vh[t[0]]), p1 = m.point(vh[t[1]]), p2 = m.point(vh[t[2]]);  // copies: add_vertex may reallocate
+      m.add_face(m.add_vertex(p0), m.add_vertex(p1), m.add_vertex(p2));
     }
   }
   OpenMesh::IO::Options opt;

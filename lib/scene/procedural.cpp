@@ -53,8 +53,10 @@ TriMesh to_openmesh(const TriangleMesh& mesh) {
   for (const auto& v : mesh.vertices) vh.push_back(m.add_vertex(TriMesh::Point(v.x, v.y, v.z)));
   for (const auto& t : mesh.triangles) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    if (!m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]).is_valid())
-      m.add_face(m.add_vertex(m.point(vh[t[0]])), m.add_vertex(m.point(vh[t[1]])), m.add_vertex(m.point(vh[t[2]])));
+    if (!m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]).is_valid()) {
+      const TriMesh::Point p0 = m.point(vh[t[0]]), p1 = m.point(vh[t[1]]), p2 = m.point(vh[t[2]]);  // copies: add_vertex may reallocate
+      m.add_face(m.add_vertex(p0), m.add_vertex(p1), m.add_vertex(p2));
+    }
   }
   return m;
 }
@@ -302,11 +304,21 @@ Scene make_subdivided(const Scene& of, int levels) {
     return s;
   }
   TriMesh m = to_openmesh(of.mesh);
+  // Room for the final mesh up front: LoopT holds references to points across add_vertex, which
+  // dangle when the vertex array reallocates (seen as garbage coordinates on large meshes).
+  std::size_t nv = m.n_vertices(), ne = m.n_edges(), nf = m.n_faces();
+  for (int l = 0; l < levels; ++l) {
+    nv += ne;
+    ne = 2 * ne + 3 * nf;
+    nf *= 4;
+  }
+  m.reserve(nv, ne, nf);
   OpenMesh::Subdivider::Uniform::LoopT<TriMesh> loop;
   loop.attach(m);
   loop(static_cast<std::size_t>(levels));
   loop.detach();
   s.mesh = from_openmesh(m);
+  for (const auto& v : s.mesh.vertices) require(is_finite(v), "subdivided: the subdivision produced a non-finite coordinate");
   return s;
 }
 
@@ -341,7 +353,7 @@ Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c
   require(base != nullptr, "instances: no base scene");
   require(!base->instanced(), "instances: the base " + base->spec + " is itself instanced (one instance level)");
   require(base->primitive_count() > 0, "instances: the base " + base->spec + " is empty");
-  require(c.count >= 1 && c.count <= 1000000000, "instances: count must be in [1, 10^9]");
+  require(c.count >= 1 && c.count <= (1 << 24), "instances: count must be in [1, 2^24] (96 bytes of transform each)");
   const Bounds3f b = base->bounds();
   const Vec3d centre(b.center());
   const double diag = length(Vec3d(b.diagonal()));

@@ -1,6 +1,7 @@
 #include "scene/scene_spec.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -121,7 +122,7 @@ std::shared_ptr<Scene> build(const std::string& text) {
   } else if (name == "instances") {
     InstancesConfig c;
     const std::string of = r.get_string("of", "cgal:bunny00");
-    c.count = r.get_int("count", c.count, 1, 1000000000);
+    c.count = r.get_int("count", c.count, 1, std::int64_t{1} << 24);
     c.seed = static_cast<std::uint64_t>(r.get_int("seed", 1, 0, kMaxSeed));
     r.finish(params);
     *scene = make_instances(make_scene(of), c);
@@ -142,6 +143,11 @@ std::shared_ptr<const Scene> make_scene(const std::string& spec) {
     throw InputError("spec " + quoted(spec) + ": " + msg);
   }
   scene->spec = spec;
+  for (const auto& v : scene->mesh.vertices)
+    if (!is_finite(v)) throw InputError("spec " + quoted(spec) + ": the scene has a non-finite vertex coordinate");
+  for (const auto& sp : scene->spheres)
+    if (!is_finite(sp.center) || !std::isfinite(sp.radius) || !is_finite(sp.bounds().hi) || !is_finite(sp.bounds().lo))
+      throw InputError("spec " + quoted(spec) + ": the scene has a sphere with a non-finite centre or radius");
   if (scene->total_primitive_count() == 0) throw InputError("spec " + quoted(spec) + ": the scene is empty");
   return scene;
 }
@@ -182,7 +188,7 @@ const std::vector<SceneKindDoc>& scene_kinds() {
        {{"of", "cgal:bunny00", "the scene to decimate"}, {"faces", "1000", "target triangle count, in [1, 2^27]"}}},
       {"instances", "copies of a scene on a grid, each slightly rotated (transforms only)",
        {{"of", "cgal:bunny00", "the base scene"},
-        {"count", "1000", "number of instances, in [1, 10^9]"},
+        {"count", "1000", "number of instances, in [1, 2^24]"},
         {"seed", "1", "random seed of the rotations"}}},
   };
   return kinds;
