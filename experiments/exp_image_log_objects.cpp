@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
           const double n = static_cast<double>(scene->mesh.size());
           ns[accel_spec].push_back(t);
           tris[accel_spec].push_back(n);
-          csv.row(fmt::format("\"{}\"", fam.name), spec, scene->mesh.size(), accel_spec, rays.size(), t, build_s,
+          csv.row(fam.name, spec, scene->mesh.size(), accel_spec, rays.size(), t, build_s,
                   static_cast<double>(counted.hit_count) / rays.size(),
                   static_cast<double>(counted.counters.prim_tests) / rays.size());
         }

@@ -73,12 +73,25 @@ class CsvWriter {
   template <class... T>
   void row(const T&... values) {
     std::size_t i = 0;
-    ((out_ << (i++ ? "," : "") << values), ...);
+    ((out_ << (i++ ? "," : "") << field(values)), ...);
     out_ << "\n";
     out_.flush();
   }
 
  private:
+  /// Text is quoted (RFC 4180) when it holds a comma, a quote or a line break; numbers pass.
+  static std::string field(const std::string& s) {
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  }
+  static std::string field(const char* s) { return field(std::string(s)); }
+  template <class T>
+  static const T& field(const T& v) {
+    return v;
+  }
+
   std::ofstream out_;
 };
 

@@ -1,8 +1,12 @@
 #!/usr/bin/python3
 """Builds the plots and the generated report page docs/results/README.md from the CSV files and
 Markdown fragments the experiment binaries wrote. Run by `./lab report`; uses Debian's
-/usr/bin/python3 (python3-matplotlib, python3-pandas)."""
+/usr/bin/python3 (python3-matplotlib, python3-pandas).
+
+Plots: every module experiments/plot_*.py has a function plot(out_dir: pathlib.Path) that
+reads its experiment's CSV from out_dir (returning quietly when it is absent) and writes PNGs."""
 import datetime
+import importlib.util
 import pathlib
 import subprocess
 import sys
@@ -10,45 +14,9 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
 
 # Fragments in reading order; any other *.md fragment follows alphabetically.
 ORDER = ["image_log_objects", "oracle_agreement"]
-
-
-def plot_image_log_objects(out: pathlib.Path) -> None:
-    csv = out / "image_log_objects.csv"
-    if not csv.exists():
-        return
-    df = pd.read_csv(csv)
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    markers = {"brute": "o", "embree": "s"}
-    for (family, accel), g in df.groupby(["family", "accel"]):
-        g = g.sort_values("triangles")
-        n = g["triangles"].to_numpy(float)
-        y = g["ns_per_ray"].to_numpy(float)
-        line, = ax.plot(n, y, marker=markers.get(accel, "x"), linestyle="none", label=f"{accel}, {family}")
-        if accel == "brute":
-            b, a = np.polyfit(n, y, 1)
-            xs = np.geomspace(n.min(), n.max(), 50)
-            ax.plot(xs, a + b * xs, color=line.get_color(), linewidth=1, label=f"fit {a:.0f} + {b:.3f}·N")
-        else:
-            b, a = np.polyfit(np.log2(n), y, 1)
-            xs = np.geomspace(n.min(), n.max(), 50)
-            ax.plot(xs, a + b * np.log2(xs), color=line.get_color(), linewidth=1,
-                    label=f"fit {a:.0f} + {b:.1f}·log2 N")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("triangles N")
-    ax.set_ylabel("ns per ray (1 thread)")
-    ax.set_title("Brute force grows like N, Embree like log N")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "image_log_objects.png", dpi=120)
-    plt.close(fig)
 
 
 def git_revision() -> str:
@@ -67,7 +35,11 @@ def main() -> int:
     if not out.is_dir():
         print(f"make_report.py: error: {out} is not a directory", file=sys.stderr)
         return 2
-    plot_image_log_objects(out)
+    for module_path in sorted(pathlib.Path(__file__).parent.glob("plot_*.py")):
+        spec = importlib.util.spec_from_file_location(module_path.stem, module_path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        module.plot(out)
     fragments = {p.stem: p for p in out.glob("*.md") if p.name != "README.md"}
     names = [n for n in ORDER if n in fragments] + sorted(n for n in fragments if n not in ORDER)
     page = ["# raylab results: theory against practice", "",
