@@ -5,6 +5,9 @@
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -21,6 +24,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/camera.h"
 #include "rays/ray_file.h"
@@ -80,7 +84,7 @@ void print_accels() {
   for (const auto& k : accelerator_kinds()) {
     std::cout << k.name << "\n    " << k.summary << "\n";
     for (const auto& p : k.params)
-      std::cout << "    " << p.key << "=" << "  (default " << p.default_value << ") " << p.description << "\n";
+      std::cout << "    " << p.key << "=...  " << p.description << " (default " << p.default_value << ")\n";
     SpecReader none(parse_spec(k.name));
     std::cout << "    accuracy: " << k.accuracy(none).statement << "\n";
   }
@@ -90,7 +94,15 @@ void print_scenes() {
   for (const auto& k : scene_kinds()) {
     std::cout << k.name << "\n    " << k.summary << "\n";
     for (const auto& p : k.params)
-      std::cout << "    " << p.key << "=" << "  (default " << p.default_value << ") " << p.description << "\n";
+      std::cout << "    " << p.key << "=...  " << p.description << " (default " << p.default_value << ")\n";
+  }
+}
+
+void print_ray_generators() {
+  for (const auto& g : ray_generator_docs()) {
+    std::cout << g.usage << "\n    " << g.summary << "\n";
+    for (const auto& p : g.params)
+      std::cout << "    " << p.key << "=...  " << p.description << " (default " << p.default_value << ")\n";
   }
 }
 
@@ -104,7 +116,7 @@ int run_info(const InfoOptions& o) {
   const SceneInfo info = describe(*scene);
   nlohmann::ordered_json j;
   j["scene"] = o.scene;
-  j["primitives"] = info.primitives;
+  j["primitives"] = static_cast<std::uint64_t>(info.primitives);
   j["triangles"] = info.triangles;
   j["spheres"] = info.spheres;
   j["instances"] = info.instances;
@@ -157,7 +169,7 @@ int run_trace(const TraceCommand& o) {
   nlohmann::ordered_json j;
   j["scene"] = o.scene;
   j["triangles"] = scene->instanced() ? scene->base->mesh.size() * scene->instances.size() : scene->mesh.size();
-  j["primitives"] = scene->total_primitive_count();
+  j["primitives"] = static_cast<std::uint64_t>(scene->total_primitive_count());
   j["accel"] = o.accel;
   j["build_s"] = build_s;
   j["ray_spec"] = o.rays;
@@ -232,16 +244,24 @@ int run_render(const RenderCommand& o) {
   for (int y = 0; y < o.height; ++y)
     for (int x = 0; x < o.width; ++x) rays.push_back(camera_ray(camera, x + 0.5, y + 0.5, o.width, o.height));
   std::vector<float> values(rays.size());
-  // Heatmaps need one counter set per pixel, so they trace ray by ray with counters on.
   if (o.heatmap) {
+    if (!accel->reports_counters())
+      throw InputError("--heatmap: accelerator '" + o.accel + "' reports no traversal counters");
+    // One counter set per pixel.
     timed_step("rendering heatmap", [&] {
-      for (std::size_t i = 0; i < rays.size(); ++i) {
-        RayCounters c;
-        Ray r = rays[i];
-        Hit h;
-        accel->intersect(r, h, c);
-        values[i] = static_cast<float>(c.nodes + c.leaves + c.prim_tests);
-      }
+      tbb::task_arena arena(resolve_thread_count(o.threads));
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const auto& range) {
+          const FloatModeScope ftz(true);
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            RayCounters c;
+            Ray r = rays[i];
+            Hit h;
+            accel->intersect(r, h, c);
+            values[i] = static_cast<float>(c.nodes + c.leaves + c.prim_tests);
+          }
+        });
+      });
       return 0;
     });
     write_heatmap_png(o.out, values, o.width, o.height, "nodes + leaves + primitive tests per pixel (" + o.accel + ")");
@@ -269,6 +289,7 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("accels", "list the accelerators, their parameters and accuracy bounds");
   app.add_subcommand("scenes", "list the scene kinds and their parameters");
+  app.add_subcommand("rays", "list the ray generators and their parameters");
   auto* cgal = app.add_subcommand("cgal-meshes", "list the CGAL demo meshes available as cgal:NAME");
 
   InfoOptions info;
@@ -311,6 +332,7 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("accels")) print_accels();
     else if (app.got_subcommand("scenes")) print_scenes();
+    else if (app.got_subcommand("rays")) print_ray_generators();
     else if (cgal->parsed()) { for (const auto& n : cgal_mesh_names()) std::cout << "cgal:" << n << "\n"; }
     else if (info_cmd->parsed()) return run_info(info);
     else if (trace_cmd->parsed()) return run_trace(trace);

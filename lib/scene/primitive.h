@@ -41,6 +41,8 @@ class Aggregate : public Primitive {
  public:
   virtual std::string name() const = 0;
   virtual AccelStats stats() const = 0;
+  /// False for accelerators whose traversal raylab cannot see (Embree): their counters stay 0.
+  virtual bool reports_counters() const { return true; }
 };
 
 /// Implements Primitive's four virtuals for an accelerator whose traversal is

@@ -130,6 +130,7 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
   /// Bytes Embree allocated while building this scene (its memory monitor callback), which
   /// includes its copy of the vertex and index buffers.
   AccelStats stats() const override { return {bytes_, 0, -1.0}; }
+  bool reports_counters() const override { return false; }
   Bounds3f bounds() const override { return bounds_; }
 
   template <class Counters>

@@ -1,0 +1,102 @@
+// The `raylab` tool as a user runs it: bad input of every kind gives one line
+// `raylab: error: ...` on stderr and exit status 2; a good trace prints one JSON object with the
+// documented fields, and brute force agrees with the exact oracle.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace {
+
+struct ToolRun {
+  int status = -1;
+  std::string out, err;
+};
+
+ToolRun run_tool(const std::string& args) {
+  const auto dir = std::filesystem::temp_directory_path() / ("raylab_cli_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string out = (dir / "out").string(), err = (dir / "err").string();
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  const std::string cmd = std::string(RAYLAB_TOOL_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+  const int raw = std::system(cmd.c_str());
+  ToolRun r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  auto slurp = [](const std::string& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("raylab_cli_" + std::to_string(::getpid()) + "_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(ToolCli, BadInputGivesOneErrorLineAndExitStatusTwo) {
+  const std::string nan_rays = write_file("nan.rays", "0 0 5 0 0 -1 0 inf\nnan 0 5 0 0 -1 0 inf\n");
+  const std::string empty_off = write_file("empty.off", "OFF\n0 0 0\n");
+  const std::vector<std::string> cases = {
+      "trace --scene cgal:no_such_mesh",
+      "trace --scene /no/such/file.off",
+      "trace --scene " + empty_off,
+      "trace --scene soup:n=100 --accel no-such-accel",
+      "trace --scene soup:n=100 --accel embree:quality=ultra",
+      "trace --scene soup:n=100 --accel brute:leaf=4",
+      "trace --scene soup:n=0",
+      "trace --scene soup:n=100 --rays primary:-5",
+      "trace --scene soup:n=100 --rays file:" + nan_rays,
+      "trace --scene soup:n=100 --check oracle",
+      "trace --scene sphere:n=nan",
+      "info 'stadium:object=(soup:n=10'",
+      "render --scene soup:n=100 --out image.jpg",
+      "render --scene soup:n=100 --accel embree --heatmap --out /tmp/raylab_cli_heat.png",
+  };
+  for (const auto& args : cases) {
+    const ToolRun r = run_tool(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("raylab: error: ", 0), 0u) << args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
+  }
+}
+
+TEST(ToolCli, TracePrintsOneJsonObjectAndBruteForceMatchesTheOracle) {
+  const ToolRun r = run_tool("trace --scene sphere:n=2000 --accel brute --rays diffuse:2000 --threads 1 --check exact --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"scene", "triangles", "accel", "build_s", "rays", "trace_s", "mrays_per_s", "hit_rate",
+                          "nodes_per_ray", "leaves_per_ray", "prim_tests_per_ray", "mailbox_skips_per_ray",
+                          "accel_bytes", "peak_rss_bytes", "mismatches", "ties"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["rays"], 2000);
+  EXPECT_EQ(j["mismatches"], 0);
+  EXPECT_EQ(j["threads"], 1);
+  EXPECT_DOUBLE_EQ(j["prim_tests_per_ray"].get<double>(), static_cast<double>(j["triangles"].get<int>()));
+}
+
+TEST(ToolCli, RayFilesRoundTripThroughTrace) {
+  const std::string rays = write_file("one.rays", "# one ray down the z axis\n0.25 0.25 5 0 0 -1 0 inf\n");
+  const std::string hits = (std::filesystem::temp_directory_path() / "raylab_cli_hits.csv").string();
+  const std::string mesh = write_file("tri.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const ToolRun r = run_tool("trace --scene " + mesh + " --accel brute --rays file:" + rays + " --hits-out " + hits + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(hits);
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  EXPECT_EQ(header, "ray,prim,t,u,v");
+  EXPECT_EQ(row.substr(0, 8), "0,0,5,0.");
+}
+
+}  // namespace
