@@ -1,5 +1,8 @@
 #include "accel/common/accel_factory.h"
 
+#include <algorithm>
+#include <stdexcept>
+
 #include "accel/brute/brute_force.h"
 #include "accel/common/ray_sets.h"
 #include "accel/embree/embree_accel.h"
@@ -104,8 +107,40 @@ std::vector<AccelKind> make_registry() {
 
 }  // namespace
 
+std::unique_ptr<Aggregate> make_instanced_aggregate(
+    const Scene& scene, const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make) {
+  return over_instances(scene, make);
+}
+
+namespace {
+
+struct PendingRegistrations {
+  std::vector<std::pair<int, AccelKind>> kinds;
+  bool sealed = false;
+};
+
+PendingRegistrations& pending_registrations() {
+  static PendingRegistrations pending;
+  return pending;
+}
+
+}  // namespace
+
+AccelRegistration::AccelRegistration(AccelKind kind, int order) {
+  PendingRegistrations& p = pending_registrations();
+  if (p.sealed) throw std::logic_error("AccelRegistration of '" + kind.name + "' after the registry was read");
+  p.kinds.emplace_back(order, std::move(kind));
+}
+
 const std::vector<AccelKind>& accelerator_kinds() {
-  static const std::vector<AccelKind> kinds = make_registry();
+  static const std::vector<AccelKind> kinds = [] {
+    std::vector<AccelKind> all = make_registry();
+    PendingRegistrations& p = pending_registrations();
+    p.sealed = true;
+    std::stable_sort(p.kinds.begin(), p.kinds.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [order, kind] : p.kinds) all.push_back(std::move(kind));
+    return all;
+  }();
   return kinds;
 }
 

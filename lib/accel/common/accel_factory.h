@@ -45,8 +45,25 @@ struct AccelKind {
   std::vector<std::string> oracle_variants = {};
 };
 
-/// Every accelerator the lab knows, in listing order.
+/// For an instanced scene: builds `make(scene.base)` once and places it under every instance
+/// transform (TransformedPrimitive) in a brute-force top level. Throws InputError for a singular
+/// instance transform.
+std::unique_ptr<Aggregate> make_instanced_aggregate(
+    const Scene& scene, const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make);
+
+/// Every accelerator the lab knows, in listing order: the built-in kinds of accel_factory.cpp,
+/// then the registered ones by `order`.
 const std::vector<AccelKind>& accelerator_kinds();
+
+/// Registers an accelerator kind from its own translation unit, at static-initialisation time:
+///
+///   namespace { const AccelRegistration kdtree_registration(make_kdtree_kind(), 40); }
+///
+/// raylab is one shared library, so every registration in it runs before main(). Registering
+/// after accelerator_kinds() has first been called is a logic error (std::logic_error).
+struct AccelRegistration {
+  AccelRegistration(AccelKind kind, int order);
+};
 
 /// Looks up `name`; throws InputError listing the valid names.
 const AccelKind& find_accelerator_kind(const std::string& name);
