@@ -5,6 +5,8 @@
 /// transform. Dynamic dispatch lives here, at the primitive/aggregate boundary only; inside an
 /// accelerator the loops over nodes and shapes are templates.
 #include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <string>
 
 #include "geometry/bounds.h"
@@ -43,6 +45,10 @@ class Aggregate : public Primitive {
   virtual AccelStats stats() const = 0;
   /// False for accelerators whose traversal raylab cannot see (Embree): their counters stay 0.
   virtual bool reports_counters() const { return true; }
+  /// A hash of the built structure (e.g. FNV-1a over the node and index arrays), for the
+  /// determinism tests: equal inputs and parameters must give equal hashes with any thread
+  /// count and across runs. nullopt for accelerators without an inspectable structure.
+  virtual std::optional<std::uint64_t> structure_hash() const { return std::nullopt; }
 };
 
 /// Implements Primitive's four virtuals for an accelerator whose traversal is
