@@ -15,6 +15,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <mutex>
@@ -78,6 +79,15 @@ auto timed_step(const std::string& what, Work&& work, double* seconds = nullptr)
     finish();
     throw;
   }
+}
+
+/// Any-hit results: CSV `ray,blocked` with blocked 0 or 1.
+void write_blocked_csv(const std::string& path, const std::vector<std::uint8_t>& blocked) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path + ": cannot write");
+  out << "ray,blocked\n";
+  for (std::size_t i = 0; i < blocked.size(); ++i) out << i << ',' << int(blocked[i]) << '\n';
+  if (!out) throw InputError(path + ": write failed");
 }
 
 void print_accels() {
@@ -209,14 +219,8 @@ int run_trace(const TraceCommand& o) {
   }
   j["peak_rss_bytes"] = peak_rss_bytes();
   if (!o.hits_out.empty()) {
-    if (any_hit) {
-      std::vector<Hit> as_hits(rays.size());
-      for (std::size_t i = 0; i < rays.size(); ++i)
-        if (timed.blocked[i]) as_hits[i].prim = 0;  // occluded: prim 0 marks "blocked", t unknown
-      write_hits_csv(o.hits_out, as_hits);
-    } else {
-      write_hits_csv(o.hits_out, timed.hits);
-    }
+    if (any_hit) write_blocked_csv(o.hits_out, timed.blocked);
+    else write_hits_csv(o.hits_out, timed.hits);
   }
   if (o.json) {
     std::cout << j.dump() << "\n";
