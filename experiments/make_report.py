@@ -16,7 +16,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 # Fragments in reading order; any other *.md fragment follows alphabetically.
-ORDER = ["image_log_objects", "oracle_agreement"]
+ORDER = ["image_log_objects", "oracle_agreement", "grids"]
 
 
 def git_revision() -> str:

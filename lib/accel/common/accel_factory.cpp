@@ -7,6 +7,9 @@
 #include "accel/common/ray_sets.h"
 #include "accel/embree/embree_accel.h"
 #include "accel/exact/exact_oracle.h"
+#include "accel/grid/grid_spec.h"
+#include "accel/grid/uniform_grid.h"
+#include "accel/nested_grid/nested_grid.h"
 #include "geometry/exact_predicates.h"
 #include "geometry/input_error.h"
 #include "scene/transformed_primitive.h"
@@ -102,6 +105,32 @@ std::vector<AccelKind> make_registry() {
                              "exactly at vertices (bound: 10% of edge/vertex-aimed rays on closed meshes, 50% on "
                              "open ones, where it also hits zero-area triangles; 0.1% of others)"};
                    }});
+  kinds.push_back(
+      {"grid",
+       "the lecture's uniform grid: d·∛n cells, 3D-DDA (Amanatides & Woo 1987), in-cell acceptance, mailboxes",
+       grid_cell_params(),
+       [](std::shared_ptr<const Scene> scene, SpecReader& r) -> std::unique_ptr<Aggregate> {
+         const GridConfig c = read_grid_config(r);
+         auto make = [c](std::shared_ptr<const Scene> s) -> std::unique_ptr<Aggregate> {
+           return std::make_unique<UniformGrid>(std::move(s), c);
+         };
+         return scene->instanced() ? over_instances(*scene, make) : make(std::move(scene));
+       },
+       [](SpecReader& r) { return grid_accuracy(read_grid_config(r)); },
+       {"place=exact", "mailbox=off", "accept=first", "d=0.5", "d=8"}});
+  kinds.push_back(
+      {"nested-grid",
+       "grids in crowded cells (the lecture's nested grid) or the two-level grid of Kalojanov et al. 2011",
+       nested_grid_params(),
+       [](std::shared_ptr<const Scene> scene, SpecReader& r) -> std::unique_ptr<Aggregate> {
+         const NestedGridConfig c = read_nested_grid_config(r);
+         auto make = [c](std::shared_ptr<const Scene> s) -> std::unique_ptr<Aggregate> {
+           return std::make_unique<NestedGrid>(std::move(s), c);
+         };
+         return scene->instanced() ? over_instances(*scene, make) : make(std::move(scene));
+       },
+       [](SpecReader& r) { return grid_accuracy(read_nested_grid_config(r).cells); },
+       {"mode=two-level", "place=exact", "mailbox=off", "accept=first", "threshold=4,depth=3"}});
   return kinds;
 }
 

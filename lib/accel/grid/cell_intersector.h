@@ -1,0 +1,110 @@
+#pragma once
+/// The per-ray work inside the cells of a grid, shared by the uniform and the nested grid:
+/// offering a cell's primitives to the watertight kernel, accepting hits by the cell's
+/// t-interval, and the mailbox.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+
+#include "accel/grid/grid_config.h"
+#include "accel/grid/grid_geometry.h"
+#include "accel/grid/mailbox.h"
+#include "geometry/triangle_kernels.h"
+#include "scene/scene_primitives.h"
+
+namespace raylab {
+
+/// The t-widening w of a ray's cell intervals: 2^-16 · (|o|∞ + D) / |d|∞ for a grid of diagonal
+/// extent D. It covers the rounding of the kernel's t and of the DDA's crossings, and stays far
+/// below hit_comparison.h's tolerance (1e-4 of the same scale), so a hit accepted up to w beyond
+/// its cell is at most a tie with any closer hit in the next cell.
+inline float cell_widening(const Ray& ray, float grid_extent) {
+  return kGridMarginScale * (max_component(abs(ray.org)) + grid_extent) / max_component(abs(ray.dir));
+}
+
+struct NoMailbox {};
+
+/// Closest-hit state of one ray in a grid.
+template <class Counters, bool kMailbox>
+struct ClosestHitInCells {
+  const Scene& scene;
+  WatertightKernel::Context ctx;
+  GridAcceptance acceptance;
+  float widen;
+  Counters& counters;
+  float best;  ///< t of the accepted hit (ray.tmax while none)
+  Hit hit;
+  bool found = false;
+  [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
+
+  ClosestHitInCells(const Scene& s, const Ray& ray, GridAcceptance acc, float w, Counters& c)
+      : scene(s), ctx(WatertightKernel::prepare(ray)), acceptance(acc), widen(w), counters(c), best(ray.tmax) {}
+
+  /// Offers the cell's primitives refs[begin, end) with t-interval [t_enter, t_exit]; returns true
+  /// when the traversal may stop (a hit was accepted in this cell).
+  bool leaf(const std::uint32_t* begin, const std::uint32_t* end, float /*t_enter*/, float t_exit) {
+    counters.leaf();
+    const float limit = acceptance == GridAcceptance::first ? best : t_exit + widen;
+    bool here = false;
+    for (const std::uint32_t* p = begin; p != end; ++p) {
+      const std::uint32_t prim = *p;
+      if constexpr (kMailbox) {
+        if (const RayMailbox::Entry* e = mailbox.find(prim)) {
+          counters.mailbox_skip();
+          if (e->t < best && e->t <= limit) {
+            best = e->t;
+            hit = Hit{e->t, e->u, e->v, prim, kInvalidId};
+            here = true;
+          }
+          continue;
+        }
+      }
+      ctx.tmax = best;
+      Hit h;
+      if (intersect_scene_primitive<WatertightKernel>(scene, prim, ctx, h, counters)) {
+        if (h.t <= limit) {
+          best = h.t;
+          hit = h;
+          here = true;
+        } else if constexpr (kMailbox) {
+          mailbox.store_hit(prim, h);
+        }
+      } else if constexpr (kMailbox) {
+        mailbox.store_miss(prim);
+      }
+    }
+    found |= here;
+    return here;
+  }
+};
+
+/// Any-hit state of one ray in a grid: any hit in [tmin, tmax] ends the ray, wherever it lies.
+template <class Counters, bool kMailbox>
+struct AnyHitInCells {
+  const Scene& scene;
+  WatertightKernel::Context ctx;
+  Counters& counters;
+  [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
+
+  AnyHitInCells(const Scene& s, const Ray& closed_ray, Counters& c)
+      : scene(s), ctx(WatertightKernel::prepare(closed_ray)), counters(c) {}
+
+  bool leaf(const std::uint32_t* begin, const std::uint32_t* end, float, float) {
+    counters.leaf();
+    Hit h;
+    for (const std::uint32_t* p = begin; p != end; ++p) {
+      if constexpr (kMailbox) {
+        if (mailbox.find(*p)) {
+          counters.mailbox_skip();
+          continue;
+        }
+      }
+      if (intersect_scene_primitive<WatertightKernel>(scene, *p, ctx, h, counters)) return true;
+      if constexpr (kMailbox) mailbox.store_miss(*p);
+    }
+    return false;
+  }
+};
+
+}  // namespace raylab

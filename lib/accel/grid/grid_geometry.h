@@ -1,0 +1,67 @@
+#pragma once
+/// The geometry of one regular grid: its box, its resolution and its cell size, and the
+/// robustness margins that make float traversal agree with placement.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "geometry/bounds.h"
+
+namespace raylab {
+
+/// The relative size of the two robustness margins (about 128 float ulps), far below
+/// the tolerance hit_comparison.h allows for t and far above the rounding of the 3D-DDA.
+inline constexpr float kGridMarginScale = 1.0f / 65536.0f;
+
+struct GridGeometry {
+  Bounds3f box;
+  std::array<int, 3> res{1, 1, 1};
+  Vec3f cell{1.0f};      ///< cell size per axis
+  Vec3f inv_cell{1.0f};  ///< 1 / cell size
+
+  GridGeometry() = default;
+  GridGeometry(const Bounds3f& b, const std::array<int, 3>& r) : box(b), res(r) {
+    const Vec3f d = b.diagonal();
+    for (int a = 0; a < 3; ++a) {
+      cell[a] = d[a] / static_cast<float>(res[a]);
+      inv_cell[a] = cell[a] > 0.0f ? 1.0f / cell[a] : 0.0f;
+    }
+  }
+
+  std::size_t cell_count() const { return std::size_t(res[0]) * std::size_t(res[1]) * std::size_t(res[2]); }
+  std::uint32_t index(int i, int j, int k) const {
+    return static_cast<std::uint32_t>((std::size_t(k) * std::size_t(res[1]) + std::size_t(j)) * std::size_t(res[0]) +
+                                      std::size_t(i));
+  }
+  /// The cell holding coordinate `x` along axis `a`, clamped into the grid.
+  int cell_of(int a, float x) const {
+    const float f = (x - box.lo[a]) * inv_cell[a];
+    return static_cast<int>(std::clamp(f, 0.0f, static_cast<float>(res[a] - 1)));
+  }
+  /// Coordinate of the boundary plane k along axis a (k = 0 .. res[a]).
+  float plane(int a, int k) const { return k == res[a] ? box.hi[a] : box.lo[a] + static_cast<float>(k) * cell[a]; }
+  Bounds3f cell_box(int i, int j, int k) const {
+    Bounds3f b;
+    b.lo = {plane(0, i), plane(1, j), plane(2, k)};
+    b.hi = {plane(0, i + 1), plane(1, j + 1), plane(2, k + 1)};
+    return b;
+  }
+};
+
+/// The placement margin δ of a scene with bounds `b`: 2^-16 of (its largest coordinate magnitude
+/// + its largest extent). Cells are widened by δ when primitives are placed, so that a point the
+/// 3D-DDA attributes to a cell by float rounding (a few ulps of the coordinates) lies in that
+/// cell's primitives' region; grids are built on the scene box widened by δ.
+inline float grid_margin(const Bounds3f& b) {
+  const float mag = std::max(max_component(abs(b.lo)), max_component(abs(b.hi)));
+  return std::max(kGridMarginScale * (mag + max_component(b.diagonal())), 1e-30f);
+}
+
+inline Bounds3f widened(Bounds3f b, float margin) {
+  b.lo = b.lo - Vec3f(margin);
+  b.hi = b.hi + Vec3f(margin);
+  return b;
+}
+
+}  // namespace raylab

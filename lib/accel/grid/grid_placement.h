@@ -1,0 +1,37 @@
+#pragma once
+/// Placing primitives in the cells of one grid (the lecture's preprocessing step 3), stored
+/// compactly: one index array and per-cell offsets (CSR), built by a counting sort.
+#include <cstdint>
+#include <vector>
+
+#include "accel/grid/grid_config.h"
+#include "accel/grid/grid_geometry.h"
+#include "scene/scene.h"
+
+namespace raylab {
+
+/// Cell c holds refs[offsets[c] .. offsets[c+1]).
+struct CellLists {
+  std::vector<std::uint32_t> offsets;  ///< cell_count + 1 entries
+  std::vector<std::uint32_t> refs;     ///< primitive ids
+
+  std::uint32_t count(std::size_t c) const { return offsets[c + 1] - offsets[c]; }
+  std::size_t bytes() const { return (offsets.size() + refs.size()) * sizeof(std::uint32_t); }
+};
+
+/// Places `prims` (ids of `scene`, which must not be instanced) in the cells of `grid`, every cell
+/// widened by `margin` on each side (grid_geometry.h):
+///  - bbox: the cells the primitive's bounding box overlaps; two passes (count, then fill) over
+///    the cell ranges of the primitives, no allocation besides the two arrays.
+///  - exact: among those, the cells whose closed (widened) box the triangle meets, decided by
+///    CGAL's exact predicate (exact_triangle_intersects_box); a sphere is kept when the distance
+///    from its centre to the box, evaluated in double, is at most its radius·(1 + 1e-6) + margin
+///    (conservative: double rounding is far below that slack).
+/// Throws InputError when the references would overflow 32-bit offsets.
+CellLists place_primitives(const Scene& scene, const std::uint32_t* prims, std::size_t n, const GridGeometry& grid,
+                           GridPlacement placement, float margin);
+
+/// The same for all primitives of the scene (ids 0 .. primitive_count-1).
+CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin);
+
+}  // namespace raylab

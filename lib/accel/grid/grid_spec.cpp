@@ -1,0 +1,36 @@
+#include "accel/grid/grid_spec.h"
+
+namespace raylab {
+
+std::vector<ParamDoc> grid_cell_params() {
+  return {
+      {"d", "3", "density: max(nx, ny, nz) = d·∛n (the lecture's heuristic, d ≈ 3), in [0.01, 64]"},
+      {"place", "bbox", "placement: bbox (cells the bounding box overlaps) | exact (cells the primitive meets, CGAL)"},
+      {"accept", "in-cell", "in-cell (hit must lie in the cell's t-interval) | first (the lecture's mistake)"},
+      {"mailbox", "on", "per-ray mailbox: on | off"},
+      {"max_cells", "134217728", "cap on the cells of one grid (d is lowered to meet it), in [1, 2^30]"},
+  };
+}
+
+GridConfig read_grid_config(SpecReader& r) {
+  GridConfig c;
+  c.density = r.get_double("d", 3.0, 0.01, 64.0);
+  c.placement = r.get_choice("place", "bbox", {"bbox", "exact"}) == "exact" ? GridPlacement::exact : GridPlacement::bbox;
+  c.acceptance =
+      r.get_choice("accept", "in-cell", {"in-cell", "first"}) == "first" ? GridAcceptance::first : GridAcceptance::in_cell;
+  c.mailbox = r.get_bool("mailbox", true);
+  c.max_cells = r.get_int("max_cells", std::int64_t(1) << 27, 1, std::int64_t(1) << 30);
+  return c;
+}
+
+AccuracyBound grid_accuracy(const GridConfig& c) {
+  if (c.acceptance == GridAcceptance::first)
+    return {1.0, 1.0, 1.0,
+            "accept=first is the lecture's mistake: a hit found in a cell may lie beyond it, behind a closer hit in a "
+            "later cell; no agreement is claimed"};
+  return {0.0, 0.5, 0.0,
+          "exact agreement (watertight kernel, in-cell acceptance), except on rays grazing open meshes exactly at an "
+          "edge or vertex (bound there: 50%)"};
+}
+
+}  // namespace raylab

@@ -1,0 +1,19 @@
+#include "accel/grid/uniform_grid.h"
+
+#include "geometry/input_error.h"
+
+namespace raylab {
+
+UniformGrid::UniformGrid(std::shared_ptr<const Scene> scene, const GridConfig& config)
+    : scene_(std::move(scene)), config_(config), bounds_(scene_->bounds()) {
+  if (scene_->instanced()) throw InputError("grid: scene '" + scene_->spec + "' is instanced twice over");
+  const float margin = grid_margin(bounds_);
+  const Bounds3f box = widened(bounds_, margin);
+  grid_ = GridGeometry(box, grid_resolution(box, static_cast<double>(scene_->primitive_count()), config_.density,
+                                            config_.max_cells));
+  const Vec3f d = box.diagonal();
+  extent_ = d.x + d.y + d.z;
+  lists_ = place_all_primitives(*scene_, grid_, config_.placement, margin);
+}
+
+}  // namespace raylab

@@ -1,0 +1,95 @@
+#include "accel/nested_grid/nested_grid.h"
+
+#include <numeric>
+#include <string>
+
+#include "accel/grid/grid_placement.h"
+#include "accel/grid/grid_spec.h"
+#include "geometry/input_error.h"
+
+namespace raylab {
+
+std::vector<ParamDoc> nested_grid_params() {
+  std::vector<ParamDoc> p = {
+      {"mode", "nested", "nested (refine crowded cells recursively) | two-level (Kalojanov et al. 2011)"},
+      {"threshold", "64", "nested: refine cells with more primitives than this, in [1, 2^30]"},
+      {"depth", "2", "nested: levels of refinement below the top grid, in [1, 8]"},
+      {"top_d", "1", "two-level: density d of the top grid, in [0.01, 64]"},
+      {"sub_d", "1.5", "density d of the refined grids (both modes), in [0.01, 64]"},
+  };
+  for (auto& q : grid_cell_params()) p.push_back(q);
+  return p;
+}
+
+NestedGridConfig read_nested_grid_config(SpecReader& r) {
+  NestedGridConfig c;
+  c.cells = read_grid_config(r);
+  c.mode = r.get_choice("mode", "nested", {"nested", "two-level"}) == "two-level" ? NestedGridMode::two_level
+                                                                                   : NestedGridMode::nested;
+  c.threshold = static_cast<int>(r.get_int("threshold", 64, 1, std::int64_t(1) << 30));
+  c.depth = static_cast<int>(r.get_int("depth", 2, 1, 8));
+  c.top_density = r.get_double("top_d", 1.0, 0.01, 64.0);
+  c.sub_density = r.get_double("sub_d", 1.5, 0.01, 64.0);
+  return c;
+}
+
+NestedGrid::NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfig& config)
+    : scene_(std::move(scene)), config_(config), bounds_(scene_->bounds()) {
+  if (scene_->instanced()) throw InputError("nested-grid: scene '" + scene_->spec + "' is instanced twice over");
+  margin_ = grid_margin(bounds_);
+  const Bounds3f box = widened(bounds_, margin_);
+  const Vec3f d = box.diagonal();
+  extent_ = d.x + d.y + d.z;
+  std::vector<std::uint32_t> all(scene_->primitive_count());
+  std::iota(all.begin(), all.end(), 0u);
+  build_level(all.data(), all.size(), box, 0);
+}
+
+std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level) {
+  const bool two_level = config_.mode == NestedGridMode::two_level;
+  const double density =
+      level > 0 ? config_.sub_density : (two_level ? config_.top_density : config_.cells.density);
+  const GridGeometry geom(box, grid_resolution(box, static_cast<double>(n), density, config_.cells.max_cells));
+  if (level > 0 && static_cast<double>(cells_.size() + geom.cell_count()) > cell_budget_) return kChild;
+  const CellLists lists = place_primitives(*scene_, prims, n, geom, config_.cells.placement, margin_);
+  if (level > 0) {
+    // A refinement is futile when its cells see, on average, more than half of the parent cell's
+    // primitives (long or crowded primitives spanning the whole cell): the caller keeps a leaf.
+    std::size_t nonempty = 0;
+    for (std::size_t c = 0; c < geom.cell_count(); ++c) nonempty += lists.count(c) != 0;
+    if (2 * lists.refs.size() > n * nonempty) return kChild;
+  }
+  const auto gi = static_cast<std::uint32_t>(levels_.size());
+  const std::size_t base = cells_.size();
+  levels_.push_back({geom, base});
+  cells_.resize(base + geom.cell_count());
+  if (level == 0) cell_budget_ = static_cast<double>(cells_.size()) + config_.cells_per_primitive_budget * double(n);
+  const int max_level = two_level ? 1 : config_.depth;
+  const std::size_t refine_above = two_level ? 1 : static_cast<std::size_t>(config_.threshold);
+  for (int k = 0; k < geom.res[2]; ++k)
+    for (int j = 0; j < geom.res[1]; ++j)
+      for (int i = 0; i < geom.res[0]; ++i) {
+        const std::uint32_t c = geom.index(i, j, k);
+        const std::uint32_t b = lists.offsets[c], cnt = lists.count(c);
+        if (level < max_level && cnt > refine_above) {
+          Bounds3f content;
+          for (std::uint32_t r = b; r < b + cnt; ++r) content.extend(scene_->primitive_bounds(lists.refs[r]));
+          const Bounds3f child_box = widened(raylab::intersect(widened(geom.cell_box(i, j, k), margin_), content), margin_);
+          const auto res = grid_resolution(child_box, cnt, config_.sub_density, config_.cells.max_cells);
+          if (!child_box.empty() && std::size_t(res[0]) * res[1] * res[2] > 1) {
+            const std::uint32_t child = build_level(lists.refs.data() + b, cnt, child_box, level + 1);
+            if (child != kChild) {
+              cells_[base + c] = {child, kChild};
+              continue;
+            }
+          }
+        }
+        if (refs_.size() + cnt > kChild - 1)
+          throw InputError("nested-grid: cell references overflow 32-bit offsets; lower d or the depth");
+        cells_[base + c] = {static_cast<std::uint32_t>(refs_.size()), cnt};
+        refs_.insert(refs_.end(), lists.refs.begin() + b, lists.refs.begin() + b + cnt);
+      }
+  return gi;
+}
+
+}  // namespace raylab

@@ -1,0 +1,113 @@
+#pragma once
+/// `nested-grid`: grids in the cells of grids (the lecture's answer to the teapot in the stadium),
+/// or the two-level grid of Kalojanov, Billeter and Slusallek 2011 (nested_grid_config.h).
+/// Every level is a regular grid traversed by the 3D-DDA of Amanatides and Woo 1987; a refined
+/// cell hands its clipped t-interval to its child grid, so the leaf cells' t-intervals still
+/// partition the ray and in-cell acceptance and the mailbox work as in the uniform grid.
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "accel/grid/cell_intersector.h"
+#include "accel/grid/grid_geometry.h"
+#include "accel/grid/grid_traversal.h"
+#include "accel/nested_grid/nested_grid_config.h"
+#include "scene/primitive.h"
+#include "scene/scene.h"
+
+namespace raylab {
+
+class NestedGrid final : public AggregateBase<NestedGrid> {
+ public:
+  /// Builds over `scene`, which must not be instanced and must not be empty.
+  NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfig& config);
+
+  std::string name() const override { return "nested-grid"; }
+  /// bytes: levels, cells and the index array; nodes: cells over all levels.
+  AccelStats stats() const override {
+    return {levels_.size() * sizeof(Level) + cells_.size() * sizeof(Cell) + refs_.size() * sizeof(std::uint32_t),
+            cells_.size(), -1.0};
+  }
+  Bounds3f bounds() const override { return bounds_; }
+  std::size_t level_count() const { return levels_.size(); }
+
+  template <class Counters>
+  bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
+    return config_.cells.mailbox ? closest<Counters, true>(ray, hit, counters)
+                                 : closest<Counters, false>(ray, hit, counters);
+  }
+  template <class Counters>
+  bool occluded_impl(const Ray& ray, Counters& counters) const {
+    return config_.cells.mailbox ? any<Counters, true>(ray, counters) : any<Counters, false>(ray, counters);
+  }
+
+ private:
+  static constexpr std::uint32_t kChild = 0xffffffffu;
+  /// A leaf cell holds refs_[begin, begin + count); a refined cell has count == kChild and
+  /// begin = the index of its grid in levels_.
+  struct Cell {
+    std::uint32_t begin = 0, count = 0;
+  };
+  struct Level {
+    GridGeometry geom;
+    std::size_t cell_base = 0;
+  };
+
+  /// Builds the grid of one level over `prims` in `box` and returns its index in levels_, or
+  /// kChild when a refinement (level > 0) would be futile.
+  std::uint32_t build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level);
+
+  template <class Counters, class State>
+  bool traverse(std::uint32_t gi, const Ray& ray, const Vec3f& inv, float t0, float t1, State& state,
+                Counters& counters) const {
+    const Level& L = levels_[gi];
+    return grid_dda(L.geom, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
+      counters.node();
+      const Cell cell = cells_[L.cell_base + c];
+      if (cell.count == kChild) {
+        float c0, c1;
+        if (!intersect_box(levels_[cell.begin].geom.box, ray, inv, enter, exit, c0, c1)) return false;
+        return traverse(cell.begin, ray, inv, c0, c1, state, counters);
+      }
+      return cell.count != 0 && state.leaf(refs_.data() + cell.begin, refs_.data() + cell.begin + cell.count, enter, exit);
+    });
+  }
+
+  template <class Counters, bool kMailbox>
+  bool closest(Ray& ray, Hit& hit, Counters& counters) const {
+    const Vec3f inv = safe_inverse(ray.dir);
+    float t0, t1;
+    if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, ray.tmax, t0, t1)) return false;
+    ClosestHitInCells<Counters, kMailbox> state(*scene_, ray, config_.cells.acceptance, cell_widening(ray, extent_),
+                                                counters);
+    traverse(0, ray, inv, t0, t1, state, counters);
+    if (!state.found) return false;
+    hit = state.hit;
+    ray.tmax = hit.t;
+    return true;
+  }
+
+  template <class Counters, bool kMailbox>
+  bool any(const Ray& ray, Counters& counters) const {
+    Ray closed = ray;  // kernels accept t < tmax; an any-hit query includes tmax itself
+    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Vec3f inv = safe_inverse(ray.dir);
+    float t0, t1;
+    if (!intersect_box(levels_[0].geom.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;
+    AnyHitInCells<Counters, kMailbox> state(*scene_, closed, counters);
+    return traverse(0, closed, inv, t0, t1, state, counters);
+  }
+
+  std::shared_ptr<const Scene> scene_;
+  NestedGridConfig config_;
+  Bounds3f bounds_;
+  float margin_ = 0.0f;
+  float extent_ = 0.0f;
+  double cell_budget_ = 0.0;   ///< see NestedGridConfig::cells_per_primitive_budget
+  std::vector<Level> levels_;  ///< levels_[0] is the top grid
+  std::vector<Cell> cells_;
+  std::vector<std::uint32_t> refs_;
+};
+
+}  // namespace raylab
