@@ -1,0 +1,86 @@
+// Google Benchmark figures of the SAH kd-tree, single thread:
+//  - BM_KdBuild: the event-sweep build (Wald and Havran 2006) of a ~1.2M-triangle mesh
+//    (subdivided:of=cgal:bunny00,levels=2), with exact clipping and with none; counter
+//    `exact_over_none` (on the exact run) is the cost of exactness, measured in the same process.
+//  - BM_KdTrace: traversal on primary and diffuse rays of CGAL meshes; counter `vs_embree` is our
+//    throughput over Embree's on the same rays, measured right before (1.0 = as fast).
+//   build/experiments/bench_kdtree --benchmark_min_time=0.2
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <map>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
+#include "scene/scene_spec.h"
+
+using namespace raylab;
+
+namespace {
+
+const std::string kBigMesh = "subdivided:of=cgal:bunny00,levels=2";
+const std::vector<std::string> kMeshes = {"cgal:bunny00", "cgal:armadillo", "cgal:ChineseDragon-10kv"};
+
+std::shared_ptr<const Scene> scene_for(const std::string& spec) {
+  static std::map<std::string, std::shared_ptr<const Scene>> cache;
+  auto& s = cache[spec];
+  if (!s) s = make_scene(spec);
+  return s;
+}
+
+double seconds_to_build(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene) {
+  const auto start = std::chrono::steady_clock::now();
+  auto accel = make_accelerator(accel_spec, scene);
+  benchmark::DoNotOptimize(accel.get());
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void BM_KdBuild(benchmark::State& state, const std::string& accel_spec, bool compare_to_none) {
+  const auto scene = scene_for(kBigMesh);
+  double best = 1e300;
+  for (auto _ : state) best = std::min(best, seconds_to_build(accel_spec, scene));
+  state.counters["triangles"] = static_cast<double>(scene->mesh.size());
+  state.counters["build_s"] = best;
+  if (compare_to_none) state.counters["exact_over_none"] = best / seconds_to_build("kdtree:clip=none", scene);
+}
+
+double best_trace_seconds(const Primitive& accel, const std::vector<Ray>& rays, int reps) {
+  double best = 1e300;
+  for (int i = 0; i < reps; ++i) best = std::min(best, trace_rays(accel, rays, TraceOptions{1, false, false}).seconds);
+  return best;
+}
+
+void BM_KdTrace(benchmark::State& state, const std::string& scene_spec, const std::string& ray_spec) {
+  const auto scene = scene_for(scene_spec);
+  const auto rays = make_ray_set(ray_spec, scene);
+  const auto embree = make_accelerator("embree", scene);
+  const double embree_s = best_trace_seconds(*embree, rays, 5);
+  const auto accel = make_accelerator("kdtree", scene);
+  double best = 1e300;
+  for (auto _ : state) {
+    const TraceResult r = trace_rays(*accel, rays, TraceOptions{1, false, false});
+    best = std::min(best, r.seconds);
+    benchmark::DoNotOptimize(r.hit_count);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * rays.size()));
+  state.counters["ns_per_ray"] = best / static_cast<double>(rays.size()) * 1e9;
+  state.counters["embree_ns_per_ray"] = embree_s / static_cast<double>(rays.size()) * 1e9;
+  state.counters["vs_embree"] = embree_s / best;
+}
+
+const bool registered = [] {
+  benchmark::RegisterBenchmark("BM_KdBuild/events/exact", BM_KdBuild, "kdtree:sweep=events,clip=exact", true)
+      ->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+  benchmark::RegisterBenchmark("BM_KdBuild/events/none", BM_KdBuild, "kdtree:sweep=events,clip=none", false)
+      ->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+  for (const auto& m : kMeshes)
+    for (const std::string r : {"primary:65536", "diffuse:65536"})
+      benchmark::RegisterBenchmark(("BM_KdTrace/" + m + "/" + r).c_str(), BM_KdTrace, m, r)
+          ->Unit(benchmark::kMillisecond)->UseRealTime();
+  return true;
+}();
+
+}  // namespace
+
+BENCHMARK_MAIN();

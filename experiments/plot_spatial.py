@@ -1,0 +1,73 @@
+"""Plots of exp_spatial: trace time and throughput against Embree for the kd-tree builders, the
+C_trav:C_isect sweep, build time against N for the sort and event sweeps, split clipping, and the
+three structures side by side."""
+import pathlib
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+
+def _bars(ax, g, label_cols, value, title):
+    labels = [", ".join(str(r[c]) for c in label_cols) for _, r in g.iterrows()]
+    ax.barh(range(len(g)), g[value].to_numpy(float))
+    ax.set_yticks(range(len(g)))
+    ax.set_yticklabels(labels, fontsize=6)
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, axis="x", alpha=0.3)
+
+
+def plot(out: pathlib.Path) -> None:
+    csv = out / "spatial.csv"
+    if not csv.exists():
+        return
+    df = pd.read_csv(csv)
+    fig, axes = plt.subplots(2, 3, figsize=(15, 8))
+    h = df[df["part"] == "hierarchy"]
+    if len(h):
+        _bars(axes[0][0], h, ["scene", "ray_spec", "param"], "throughput_vs_embree", "builders: throughput vs Embree")
+    r = df[df["part"] == "ratio"]
+    if len(r):
+        ax = axes[0][1]
+        ci = r["param"].str.split(":").str[1].astype(float)
+        ax.plot(ci, r["ns_per_ray"], marker="o", label="ns/ray")
+        ax.plot(ci, r["tests_per_ray"], marker="s", label="tests/ray")
+        ax.plot(ci, r["nodes_per_ray"], marker="^", label="nodes/ray")
+        ax.set_xscale("log")
+        ax.set_xlabel("C_isect (C_trav = 1)")
+        ax.set_title("C_trav : C_isect sweep", fontsize=9)
+        ax.legend(fontsize=7)
+        ax.grid(True, alpha=0.3)
+    b = df[df["part"] == "build"]
+    if len(b):
+        ax = axes[0][2]
+        for sweep, g in b[b["param"] != "embree"].groupby("param"):
+            g = g.sort_values("triangles")
+            n = g["triangles"].to_numpy(float)
+            t = g["build_s"].to_numpy(float)
+            ax.plot(n, t, marker="o", linestyle="none", label=sweep)
+            for f, style, name in ((lambda x: x * np.log2(x), "-", "N log N"),
+                                   (lambda x: x * np.log2(x) ** 2, ":", "N log² N")):
+                coef = np.polyfit(f(n), t, 1)
+                xs = np.geomspace(n.min(), n.max(), 50)
+                ax.plot(xs, np.polyval(coef, f(xs)), linestyle=style, linewidth=1, label=f"{sweep} fit {name}")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("triangles N")
+        ax.set_ylabel("build s")
+        ax.set_title("build time: sort vs events", fontsize=9)
+        ax.legend(fontsize=6)
+        ax.grid(True, which="both", alpha=0.3)
+    c = df[df["part"] == "clip"]
+    if len(c):
+        _bars(axes[1][0], c, ["scene", "param"], "tests_per_ray", "split clipping: tests per ray")
+        _bars(axes[1][1], c, ["scene", "param"], "build_s", "split clipping: build s")
+    s = df[df["part"] == "structures"]
+    if len(s):
+        _bars(axes[1][2], s, ["scene", "param"], "throughput_vs_embree", "structures: throughput vs Embree")
+    fig.tight_layout()
+    fig.savefig(out / "spatial.png", dpi=110)
+    plt.close(fig)

@@ -1,0 +1,49 @@
+#pragma once
+/// `bsp`: BSP tree with arbitrary planes (auto-partition plus axis-aligned candidates), exact
+/// classification, front-to-back traversal.
+#include <memory>
+
+#include "accel/bsp/bsp_build.h"
+#include "accel/bsp/bsp_traversal.h"
+#include "accel/common/accel_factory.h"
+
+namespace raylab {
+
+class BspTree final : public AggregateBase<BspTree> {
+ public:
+  /// `scene` must not be instanced.
+  BspTree(std::shared_ptr<const Scene> scene, const BspConfig& config);
+
+  std::string name() const override { return "bsp"; }
+  AccelStats stats() const override;
+  Bounds3f bounds() const override { return data_.bounds; }
+  std::optional<std::uint64_t> structure_hash() const override;
+  const BspTreeData& data() const { return data_; }
+
+  template <class Counters>
+  bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
+    const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    const bool found = bsp_traverse<WatertightKernel, false>(view, ray, hit, counters);
+    if (found) ray.tmax = hit.t;
+    return found;
+  }
+
+  template <class Counters>
+  bool occluded_impl(const Ray& ray, Counters& counters) const {
+    Ray closed = ray;
+    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    Hit hit;
+    const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    return bsp_traverse<WatertightKernel, true>(view, closed, hit, counters);
+  }
+
+ private:
+  std::shared_ptr<const Scene> scene_;
+  BspConfig config_;
+  BspTreeData data_;
+};
+
+AccelKind make_bsp_kind();
+BspConfig read_bsp_config(SpecReader& reader);
+
+}  // namespace raylab

@@ -1,0 +1,101 @@
+#pragma once
+/// Front-to-back BSP traversal by the side of the plane the ray origin lies on (the kd-tree's
+/// three cases, kdtree_traversal.h, with arbitrary planes), in double precision with error
+/// bounds: the plane's t* = -(n·o - offset)/(n·d) is computed once and widened by a bound on the
+/// rounding of both dot products and on the rounding of the plane itself; a ray that may lie in a
+/// plane (n·d within its error bound of 0 and the origin within its error bound of the plane)
+/// visits both children over its whole interval, and a ray exactly parallel to a plane visits the
+/// side of its origin only when the origin is surely off the plane.
+#include <cmath>
+#include <cstdint>
+
+#include "accel/bsp/bsp_node.h"
+#include "accel/kdtree/kdtree_traversal.h"
+
+namespace raylab {
+
+struct BspTreeView {
+  const BspNode* nodes;
+  const std::uint32_t* prims;
+  const Scene* scene;
+  Bounds3f bounds;
+};
+
+/// Relative bound on the rounding of a double dot product of float data and of the plane's own
+/// construction (about 10 ulps of double), with a wide margin.
+inline constexpr double kBspRelError = 1e-13;
+
+template <class Kernel, bool kAnyHit, class Counters>
+bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
+  const Vec3f inv = safe_inverse(ray.dir);
+  float tmin, tmax;
+  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  auto ctx = Kernel::prepare(ray);
+  const Vec3d o(ray.org), d(ray.dir);
+  struct Entry {
+    std::uint32_t node;
+    float tmin, tmax;
+  };
+  Entry stack[64];
+  int top = 0;
+  bool found = false;
+  std::uint32_t index = 0;
+  for (;;) {
+    const BspNode* node = &tree.nodes[index];
+    while (!node->is_leaf()) {
+      counters.node();
+      const double* n = node->normal;
+      const double qx = o.x - node->origin[0], qy = o.y - node->origin[1], qz = o.z - node->origin[2];
+      const double s = n[0] * qx + n[1] * qy + n[2] * qz;
+      const double nd = n[0] * d.x + n[1] * d.y + n[2] * d.z;
+      // |normal_i| <= scale and its rounding is a few ulps of scale, so these bound the error of
+      // s and nd against the exact plane through the triangle's vertices.
+      const double err_s = kBspRelError * node->scale * (std::abs(qx) + std::abs(qy) + std::abs(qz));
+      const double err_nd = (n[0] == 0.0 || d.x == 0.0) && (n[1] == 0.0 || d.y == 0.0) && (n[2] == 0.0 || d.z == 0.0)
+                                ? 0.0
+                                : kBspRelError * node->scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z));
+      const std::uint32_t negative = index + 1, positive = node->index;
+      if (std::abs(nd) <= err_nd) {
+        if (err_nd == 0.0 && s > err_s) {
+          index = positive;
+        } else if (err_nd == 0.0 && s < -err_s) {
+          index = negative;
+        } else {  // in the plane, or too close to parallel to tell: both sides, whole interval
+          stack[top++] = {positive, tmin, tmax};
+          index = negative;
+        }
+      } else {
+        const double t = -s / nd;
+        const double slack = (err_s + std::abs(t) * err_nd) / std::abs(nd) + 1e-6 * std::abs(t);
+        const float t_lo = static_cast<float>(t - slack), t_hi = static_cast<float>(t + slack);
+        const std::uint32_t near = nd > 0.0 ? negative : positive, far = nd > 0.0 ? positive : negative;
+        if (t_lo > std::min(tmax, Kernel::closest(ctx))) {
+          index = near;
+        } else if (t_hi < tmin) {
+          index = far;
+        } else {
+          stack[top++] = {far, std::max(t_lo, tmin), tmax};
+          index = near;
+          tmax = std::min(t_hi, tmax);
+        }
+      }
+      node = &tree.nodes[index];
+    }
+    counters.leaf();
+    const std::uint32_t* p = tree.prims + node->index;
+    for (std::uint32_t i = 0; i < node->count; ++i)
+      if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
+        found = true;
+        if constexpr (kAnyHit) return true;
+      }
+    do {
+      if (top == 0) return found;
+      --top;
+    } while (Kernel::closest(ctx) < stack[top].tmin);
+    index = stack[top].node;
+    tmin = stack[top].tmin;
+    tmax = stack[top].tmax;
+  }
+}
+
+}  // namespace raylab

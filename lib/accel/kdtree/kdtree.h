@@ -1,0 +1,70 @@
+#pragma once
+/// `kdtree`: the lecture's kd-tree over a scene's triangles and spheres (kdtree_build.h for the
+/// builders, kdtree_traversal.h for traversal), with the watertight ray-triangle kernel.
+#include <memory>
+
+#include "accel/common/accel_factory.h"
+#include "accel/kdtree/kdtree_build.h"
+#include "accel/kdtree/kdtree_traversal.h"
+
+namespace raylab {
+
+/// FNV-1a over raw bytes, continuing from `h`.
+inline std::uint64_t spatial_fnv1a(const void* data, std::size_t bytes, std::uint64_t h = 14695981039346656037ull) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  return h;
+}
+
+class KdTree final : public AggregateBase<KdTree> {
+ public:
+  /// `scene` must not be instanced.
+  KdTree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config);
+
+  std::string name() const override { return "kdtree"; }
+  AccelStats stats() const override;
+  Bounds3f bounds() const override { return data_.bounds; }
+  std::optional<std::uint64_t> structure_hash() const override;
+
+  const KdTreeData& data() const { return data_; }
+  const KdTreeConfig& config() const { return config_; }
+
+  template <class Counters>
+  bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
+    const bool found = dispatch<false>(ray, hit, counters);
+    if (found) ray.tmax = hit.t;
+    return found;
+  }
+
+  template <class Counters>
+  bool occluded_impl(const Ray& ray, Counters& counters) const {
+    Ray closed = ray;  // kernels accept t < tmax; an any-hit query includes tmax itself
+    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    Hit hit;
+    return dispatch<true>(closed, hit, counters);
+  }
+
+ private:
+  template <bool kAnyHit, class Counters>
+  bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
+    const KdTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    using K = WatertightKernel;
+    if (config_.traversal == KdTraversal::stack)
+      return config_.mailbox ? kd_traverse_stack<K, kAnyHit, true>(view, ray, hit, counters)
+                             : kd_traverse_stack<K, kAnyHit, false>(view, ray, hit, counters);
+    return config_.mailbox ? kd_traverse_recursive<K, kAnyHit, true>(view, ray, hit, counters)
+                           : kd_traverse_recursive<K, kAnyHit, false>(view, ray, hit, counters);
+  }
+
+  std::shared_ptr<const Scene> scene_;
+  KdTreeConfig config_;
+  KdTreeData data_;
+};
+
+/// The factory entry: parameters, accuracy bound and oracle variants.
+AccelKind make_kdtree_kind();
+
+/// Reads a KdTreeConfig from a spec's parameters (shared with the experiments).
+KdTreeConfig read_kdtree_config(SpecReader& reader);
+
+}  // namespace raylab

@@ -1,0 +1,157 @@
+#include "accel/kdtree/kdtree_build.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "accel/kdtree/sah_sweep_events.h"
+#include "accel/kdtree/sah_sweep_sort.h"
+
+namespace raylab {
+
+int kd_max_depth(const KdTreeConfig& config, std::size_t n) {
+  if (config.max_depth > 0) return std::min(config.max_depth, 64);
+  const double d = 8.0 + 1.3 * std::log2(static_cast<double>(std::max<std::size_t>(n, 1)));
+  return std::min(64, static_cast<int>(std::lround(d)));
+}
+
+namespace {
+
+class KdBuilderImpl {
+ public:
+  KdBuilderImpl(const Scene& scene, const KdTreeConfig& config, KdTreeData& out)
+      : scene_(scene), config_(config), out_(out), side_(scene.primitive_count(), Side::none) {}
+
+  void build_root(std::vector<PrimRef> refs) {
+    max_depth_ = kd_max_depth(config_, refs.size());
+    root_sa_ = surface_area_d(out_.bounds);
+    NodeEvents events;
+    const bool use_events = config_.builder == KdBuilder::sah && config_.sweep == KdSweep::events;
+    if (use_events)
+      for (int a = 0; a < 3; ++a) {
+        append_events(refs, a, events.axis[a]);
+        std::sort(events.axis[a].begin(), events.axis[a].end());
+      }
+    build(refs, use_events ? &events : nullptr, out_.bounds, 0);
+  }
+
+ private:
+  double area_weight(const Bounds3f& box) const { return root_sa_ > 0.0 ? surface_area_d(box) / root_sa_ : 1.0; }
+
+  void make_leaf(std::vector<PrimRef>& refs, const Bounds3f& box, int depth) {
+    const auto first = static_cast<std::uint32_t>(out_.prims.size());
+    for (const PrimRef& r : refs) out_.prims.push_back(r.prim);
+    std::sort(out_.prims.begin() + first, out_.prims.end());
+    out_.nodes.push_back(KdNode::make_leaf(first, static_cast<std::uint32_t>(refs.size())));
+    out_.sah_cost += config_.cost.leaf(refs.size()) * area_weight(box);
+    ++out_.leaves;
+    out_.depth = std::max(out_.depth, depth);
+  }
+
+  /// The split to make, or an invalid candidate for a leaf.
+  SplitCandidate choose(const std::vector<PrimRef>& refs, const NodeEvents* events, const Bounds3f& box) const {
+    const std::size_t n = refs.size();
+    SplitCandidate c;
+    switch (config_.builder) {
+      case KdBuilder::sah:
+        c = events ? find_split_events(*events, box, n, config_.cost) : find_split_sort(refs, box, config_.cost);
+        if (c.valid() && !(c.cost < config_.cost.leaf(n))) c = {};
+        return c;
+      case KdBuilder::midpoint:
+      case KdBuilder::median: {
+        if (n <= static_cast<std::size_t>(config_.leaf_size)) return c;
+        const int a = box.largest_axis();
+        if (!(box.lo[a] < box.hi[a])) return c;
+        float pos = 0.5f * (box.lo[a] + box.hi[a]);
+        if (config_.builder == KdBuilder::median) {
+          std::vector<float> centres(n);
+          for (std::size_t i = 0; i < n; ++i) centres[i] = 0.5f * (refs[i].box.lo[a] + refs[i].box.hi[a]);
+          std::nth_element(centres.begin(), centres.begin() + n / 2, centres.end());
+          if (centres[n / 2] > box.lo[a] && centres[n / 2] < box.hi[a]) pos = centres[n / 2];
+        }
+        if (!(pos > box.lo[a] && pos < box.hi[a])) return c;
+        c.axis = a;
+        c.pos = pos;
+        return c;
+      }
+    }
+    return c;
+  }
+
+  void build(std::vector<PrimRef>& refs, NodeEvents* events, const Bounds3f& box, int depth) {
+    const std::size_t n = refs.size();
+    SplitCandidate split;
+    if (n > 0 && depth < max_depth_) split = choose(refs, events, box);
+    if (!split.valid()) {
+      make_leaf(refs, box, depth);
+      return;
+    }
+    const int a = split.axis;
+    const float s = split.pos;
+    Bounds3f lbox = box, rbox = box;
+    lbox.hi[a] = s;
+    rbox.lo[a] = s;
+
+    std::vector<PrimRef> left, right, left_straddlers, right_straddlers;
+    for (const PrimRef& r : refs) {
+      if (r.box.hi[a] < s) {
+        left.push_back(r);
+        side_[r.prim] = Side::left_only;
+      } else if (r.box.lo[a] > s) {
+        right.push_back(r);
+        side_[r.prim] = Side::right_only;
+      } else {
+        const bool in_l = ref_meets_box(scene_, r, lbox, config_.clip);
+        const bool in_r = ref_meets_box(scene_, r, rbox, config_.clip);
+        if (in_l) left_straddlers.push_back({ref_bounds_in(scene_, r, lbox, config_.clip), r.prim});
+        if (in_r) right_straddlers.push_back({ref_bounds_in(scene_, r, rbox, config_.clip), r.prim});
+        side_[r.prim] = in_l && in_r ? Side::both : (in_l ? Side::left_only : (in_r ? Side::right_only : Side::none));
+      }
+    }
+    // midpoint and median stop when a split separates nothing.
+    if (config_.builder != KdBuilder::sah && left.size() + left_straddlers.size() == n &&
+        right.size() + right_straddlers.size() == n) {
+      make_leaf(refs, box, depth);
+      return;
+    }
+    NodeEvents left_events, right_events;
+    if (events) {
+      // A primitive that lost one side in the exact test is re-clipped like a straddler: its
+      // events come from its new bounds.
+      for (const PrimRef& r : left_straddlers) side_[r.prim] = Side::both;
+      for (const PrimRef& r : right_straddlers) side_[r.prim] = Side::both;
+      split_events(*events, side_, left_straddlers, right_straddlers, left_events, right_events);
+      *events = NodeEvents{};
+    }
+    left.insert(left.end(), left_straddlers.begin(), left_straddlers.end());
+    right.insert(right.end(), right_straddlers.begin(), right_straddlers.end());
+    std::vector<PrimRef>().swap(refs);
+    left_straddlers = {};
+    right_straddlers = {};
+
+    out_.sah_cost += config_.cost.c_trav * area_weight(box);
+    const auto index = static_cast<std::uint32_t>(out_.nodes.size());
+    out_.nodes.push_back(KdNode::make_interior(a, s));
+    build(left, events ? &left_events : nullptr, lbox, depth + 1);
+    out_.nodes[index].set_above_child(static_cast<std::uint32_t>(out_.nodes.size()));
+    build(right, events ? &right_events : nullptr, rbox, depth + 1);
+  }
+
+  const Scene& scene_;
+  const KdTreeConfig& config_;
+  KdTreeData& out_;
+  std::vector<Side> side_;
+  int max_depth_ = 0;
+  double root_sa_ = 0.0;
+};
+
+}  // namespace
+
+KdTreeData build_kdtree(const Scene& scene, const KdTreeConfig& config) {
+  KdTreeData data;
+  data.bounds = scene.bounds();
+  KdBuilderImpl builder(scene, config, data);
+  builder.build_root(make_root_refs(scene));
+  return data;
+}
+
+}  // namespace raylab

@@ -1,0 +1,43 @@
+#pragma once
+/// Parameters of the kd-tree (`kdtree:key=value,...`); the factory fills them and rejects others.
+#include <cstdint>
+
+#include "accel/kdtree/split_clipping.h"
+#include "accel/kdtree/sah_cost.h"
+
+namespace raylab {
+
+enum class KdBuilder {
+  midpoint,  ///< the spatial median of the node's longest axis
+  median,    ///< the median of the primitives' bound centres along the node's longest axis
+  sah,       ///< the surface area heuristic (MacDonald and Booth 1990; Wald and Havran 2006)
+};
+
+enum class KdSweep {
+  sort,    ///< sort each node's candidates again: O(N log² N) (the lecture's sweep)
+  events,  ///< presorted events kept sorted through splits: O(N log N) (Wald and Havran 2006 §4.3)
+};
+
+enum class KdTraversal {
+  recursive,  ///< Kaplan/Arvo/Jansen recursive in-order traversal
+  stack,      ///< the same order with an explicit stack (Havran's thesis, TA_B^rec)
+};
+
+struct KdTreeConfig {
+  KdBuilder builder = KdBuilder::sah;
+  KdSweep sweep = KdSweep::events;
+  ClipMode clip = ClipMode::exact;
+  KdTraversal traversal = KdTraversal::stack;
+  SahCost cost;  ///< C_trav = 1, C_isect = 1.5, empty bonus 0.2
+  /// Safety depth limit; 0 means the pbrt-v3 rule 8 + 1.3·log2(N) (pbrt-v3 §4.4.1), capped at 64.
+  int max_depth = 0;
+  /// midpoint and median stop at this many primitives (SAH stops on cost alone).
+  int leaf_size = 4;
+  /// Remember the last primitives tested by a ray and skip repeats (Amanatides and Woo 1987).
+  bool mailbox = false;
+};
+
+/// The depth limit actually used for `n` primitives.
+int kd_max_depth(const KdTreeConfig& config, std::size_t n);
+
+}  // namespace raylab

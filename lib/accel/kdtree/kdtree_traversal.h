@@ -1,0 +1,187 @@
+#pragma once
+/// Front-to-back kd-tree traversal (Kaplan 1985; Arvo; Jansen 1986; Havran's thesis ch. 5,
+/// TA_B^rec), recursive and with an explicit stack.
+///
+/// At an interior node the split plane's t* = (s - o[a]) / d[a] is computed once. The child
+/// holding the ray's points with t < t* is the near child (the lower one when d[a] > 0); with
+/// the node's interval [tmin, tmax] the three cases are
+///   t* > tmax:          only the near child, on [tmin, tmax];
+///   t* < tmin:          only the far child, on [tmin, tmax];
+///   tmin <= t* <= tmax: the near child on [tmin, t*], then the far child on [t*, tmax].
+/// Robustness: t* carries a relative error below 3 ulps, so the comparisons use t* widened by
+/// kKdPlaneSlack·|t*| on each side (a child is skipped only when the exact ray surely misses it),
+/// and a ray lying in a split plane (d[a] = 0, o[a] = s) visits one child, which suffices
+/// because every point of the plane lies in both closed children and placement is closed.
+/// A hit ends traversal only once it lies inside the current cell's interval: the far child is
+/// skipped when the closest hit so far is before the far child's entry.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "accel/kdtree/kdtree_node.h"
+#include "geometry/bounds.h"
+#include "scene/scene_primitives.h"
+
+namespace raylab {
+
+inline constexpr float kKdPlaneSlack = 1e-6f;
+
+/// The arrays traversal reads.
+struct KdTreeView {
+  const KdNode* nodes;
+  const std::uint32_t* prims;
+  const Scene* scene;
+  Bounds3f bounds;
+};
+
+/// A direct-mapped mailbox of the last primitives a ray tested (Amanatides and Woo 1987): a
+/// primitive tested once need not be tested again, since the closest hit only moves closer.
+template <bool kEnabled>
+struct KdMailbox {
+  std::uint32_t slot[8] = {kInvalidId, kInvalidId, kInvalidId, kInvalidId,
+                           kInvalidId, kInvalidId, kInvalidId, kInvalidId};
+  bool seen(std::uint32_t prim) {
+    std::uint32_t& s = slot[prim & 7u];
+    if (s == prim) return true;
+    s = prim;
+    return false;
+  }
+};
+template <>
+struct KdMailbox<false> {
+  bool seen(std::uint32_t) { return false; }
+};
+
+/// The entry interval of a ray into the root box, widened like the split t's.
+inline bool kd_root_interval(const Bounds3f& bounds, const Ray& ray, const Vec3f& inv, float& t0, float& t1) {
+  if (!intersect_box(bounds, ray, inv, ray.tmin, ray.tmax, t0, t1)) return false;
+  t0 = std::max(ray.tmin, t0 - kKdPlaneSlack * std::abs(t0));
+  t1 = std::min(ray.tmax, t1 + kKdPlaneSlack * std::abs(t1));
+  return true;
+}
+
+/// The plane's t* at an interior node, with its widened bounds and the near/far children.
+struct KdPlaneCrossing {
+  float t_lo, t_hi;
+  std::uint32_t near, far;
+};
+
+inline KdPlaneCrossing kd_cross(const KdNode& node, std::uint32_t index, const Ray& ray, const Vec3f& inv) {
+  const int a = node.axis();
+  float t = (node.split - ray.org[a]) * inv[a];
+  if (std::isnan(t)) t = 0.0f;  // origin in the plane, direction (nearly) parallel to it
+  const float slack = std::isfinite(t) ? kKdPlaneSlack * std::abs(t) : 0.0f;
+  const bool lower_first = inv[a] > 0.0f;  // inv = +inf for d = +0: the ray stays on its origin's side
+  const std::uint32_t lower = index + 1, upper = node.above_child();
+  return {t - slack, t + slack, lower_first ? lower : upper, lower_first ? upper : lower};
+}
+
+/// Tests the primitives of a leaf; returns true on a hit (any-hit queries stop there).
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+inline bool kd_test_leaf(const KdTreeView& tree, const KdNode& node, typename Kernel::Context& ctx, Hit& hit,
+                         KdMailbox<kMailbox>& mailbox, Counters& counters) {
+  counters.leaf();
+  bool found = false;
+  const std::uint32_t* p = tree.prims + node.first;
+  for (std::uint32_t i = 0, n = node.count(); i < n; ++i) {
+    if (mailbox.seen(p[i])) {
+      counters.mailbox_skip();
+      continue;
+    }
+    if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+  }
+  return found;
+}
+
+/// Iterative traversal. For kAnyHit, returns at the first hit (the caller passes a ray whose
+/// tmax is already closed).
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+bool kd_traverse_stack(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
+  const Vec3f inv = safe_inverse(ray.dir);
+  float tmin, tmax;
+  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  auto ctx = Kernel::prepare(ray);
+  KdMailbox<kMailbox> mailbox;
+  struct Entry {
+    std::uint32_t node;
+    float tmin, tmax;
+  };
+  Entry stack[72];
+  int top = 0;
+  bool found = false;
+  std::uint32_t index = 0;
+  for (;;) {
+    const KdNode* node = &tree.nodes[index];
+    while (!node->is_leaf()) {
+      counters.node();
+      const KdPlaneCrossing c = kd_cross(*node, index, ray, inv);
+      if (c.t_lo > std::min(tmax, Kernel::closest(ctx))) {
+        index = c.near;
+      } else if (c.t_hi < tmin) {
+        index = c.far;
+      } else {
+        stack[top++] = {c.far, std::max(c.t_lo, tmin), tmax};
+        index = c.near;
+        tmax = std::min(c.t_hi, tmax);
+      }
+      node = &tree.nodes[index];
+    }
+    if (kd_test_leaf<Kernel, kAnyHit, kMailbox>(tree, *node, ctx, hit, mailbox, counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+    do {
+      if (top == 0) return found;
+      --top;
+    } while (Kernel::closest(ctx) < stack[top].tmin);  // the hit lies before that cell
+    index = stack[top].node;
+    tmin = stack[top].tmin;
+    tmax = stack[top].tmax;
+  }
+}
+
+/// Recursive traversal, the lecture's form.
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+struct KdRecursiveTraversal {
+  const KdTreeView& tree;
+  const Ray& ray;
+  Vec3f inv;
+  typename Kernel::Context ctx;
+  Hit& hit;
+  Counters& counters;
+  KdMailbox<kMailbox> mailbox;
+  bool found = false;
+
+  /// Returns true when an any-hit query is answered.
+  bool visit(std::uint32_t index, float tmin, float tmax) {
+    const KdNode& node = tree.nodes[index];
+    if (node.is_leaf()) {
+      const bool h = kd_test_leaf<Kernel, kAnyHit, kMailbox>(tree, node, ctx, hit, mailbox, counters);
+      found |= h;
+      return kAnyHit && h;
+    }
+    counters.node();
+    const KdPlaneCrossing c = kd_cross(node, index, ray, inv);
+    if (c.t_lo > std::min(tmax, Kernel::closest(ctx))) return visit(c.near, tmin, tmax);  // t* > tmax
+    if (c.t_hi < tmin) return visit(c.far, tmin, tmax);                                  // t* < tmin
+    if (visit(c.near, tmin, std::min(c.t_hi, tmax))) return true;                         // tmin <= t* <= tmax
+    const float far_tmin = std::max(c.t_lo, tmin);
+    if (Kernel::closest(ctx) < far_tmin) return false;  // the hit lies inside the near cell
+    return visit(c.far, far_tmin, tmax);
+  }
+};
+
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+bool kd_traverse_recursive(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
+  const Vec3f inv = safe_inverse(ray.dir);
+  float tmin, tmax;
+  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  KdRecursiveTraversal<Kernel, kAnyHit, kMailbox, Counters> t{tree, ray, inv, Kernel::prepare(ray), hit, counters, {}};
+  t.visit(0, tmin, tmax);
+  return t.found;
+}
+
+}  // namespace raylab

@@ -1,0 +1,54 @@
+#pragma once
+/// `octree`: centre-split octree with the kd-tree's placement and split clipping, cost-based
+/// termination and front-to-back traversal.
+#include <memory>
+
+#include "accel/common/accel_factory.h"
+#include "accel/octree/octree_build.h"
+#include "accel/octree/octree_traversal.h"
+
+namespace raylab {
+
+class Octree final : public AggregateBase<Octree> {
+ public:
+  /// `scene` must not be instanced.
+  Octree(std::shared_ptr<const Scene> scene, const OctreeConfig& config);
+
+  std::string name() const override { return "octree"; }
+  AccelStats stats() const override;
+  Bounds3f bounds() const override { return data_.bounds; }
+  std::optional<std::uint64_t> structure_hash() const override;
+  const OctreeData& data() const { return data_; }
+
+  template <class Counters>
+  bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
+    const bool found = dispatch<false>(ray, hit, counters);
+    if (found) ray.tmax = hit.t;
+    return found;
+  }
+
+  template <class Counters>
+  bool occluded_impl(const Ray& ray, Counters& counters) const {
+    Ray closed = ray;
+    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    Hit hit;
+    return dispatch<true>(closed, hit, counters);
+  }
+
+ private:
+  template <bool kAnyHit, class Counters>
+  bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
+    const OctreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    return config_.mailbox ? octree_traverse<WatertightKernel, kAnyHit, true>(view, ray, hit, counters)
+                           : octree_traverse<WatertightKernel, kAnyHit, false>(view, ray, hit, counters);
+  }
+
+  std::shared_ptr<const Scene> scene_;
+  OctreeConfig config_;
+  OctreeData data_;
+};
+
+AccelKind make_octree_kind();
+OctreeConfig read_octree_config(SpecReader& reader);
+
+}  // namespace raylab

@@ -1,0 +1,21 @@
+#pragma once
+/// Parameters of the octree (`octree:key=value,...`).
+#include "accel/kdtree/sah_cost.h"
+#include "accel/kdtree/split_clipping.h"
+
+namespace raylab {
+
+struct OctreeConfig {
+  ClipMode clip = ClipMode::exact;  ///< placement and clipping as in the kd-tree (split_clipping.h)
+  /// A node is split at its centre when C_trav + Σ SA(child)/SA·N(child)·C_isect < N·C_isect,
+  /// the kd-tree's SAH applied to the eight children (no empty-space bonus). Defaults as the kd-tree's.
+  SahCost cost;
+  /// Safety depth limit; 0 means 3 + ceil(log8 N), at most 20.
+  int max_depth = 0;
+  /// Remember the last primitives tested by a ray and skip repeats.
+  bool mailbox = false;
+};
+
+int octree_max_depth(const OctreeConfig& config, std::size_t n);
+
+}  // namespace raylab

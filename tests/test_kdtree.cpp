@@ -1,0 +1,183 @@
+#include <gtest/gtest.h>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/hit_comparison.h"
+#include "accel/common/tracer.h"
+#include "accel/kdtree/kdtree.h"
+#include "geometry/exact_predicates.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+std::shared_ptr<const Scene> make(const std::string& spec) { return make_scene(spec); }
+
+/// Axis-aligned unit squares (two triangles each) on the integer planes of a 4x4x4 lattice, so
+/// that SAH picks split planes that contain triangles, and triangles touch cells only at faces.
+std::shared_ptr<const Scene> lattice_scene() {
+  auto s = std::make_shared<Scene>();
+  s->spec = "lattice";
+  auto& m = s->mesh;
+  auto quad = [&](Vec3f o, Vec3f e1, Vec3f e2) {
+    const auto b = static_cast<std::uint32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), {o, o + e1, o + e1 + e2, o + e2});
+    m.triangles.push_back({b, b + 1, b + 2});
+    m.triangles.push_back({b, b + 2, b + 3});
+  };
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 4; ++k) {
+        if ((i + j + k) % 2) continue;
+        const Vec3f o{float(i), float(j), float(k)};
+        quad(o, {1, 0, 0}, {0, 1, 0});
+        quad(o, {0, 1, 0}, {0, 0, 1});
+        quad(o, {0, 0, 1}, {1, 0, 0});
+      }
+  return s;
+}
+
+KdTreeConfig config_for(const std::string& params) {
+  SpecReader r(parse_spec("kdtree" + (params.empty() ? "" : ":" + params)));
+  return read_kdtree_config(r);
+}
+
+TEST(KdTree, SortAndEventSweepsBuildTheSameTree) {
+  for (const std::string scene_spec : {"soup:n=2000", "sphere:n=1500", "grass:blades=200", "walls:n=8,angle=30"}) {
+    const auto scene = make(scene_spec);
+    for (const std::string clip : {"none", "bbox", "exact"}) {
+      const KdTree sort(scene, config_for("sweep=sort,clip=" + clip));
+      const KdTree events(scene, config_for("sweep=events,clip=" + clip));
+      EXPECT_GT(sort.stats().nodes, 1u) << scene_spec;
+      EXPECT_EQ(sort.structure_hash(), events.structure_hash()) << scene_spec << " clip=" << clip;
+      EXPECT_DOUBLE_EQ(sort.stats().sah_cost, events.stats().sah_cost);
+    }
+  }
+  const auto lattice = lattice_scene();
+  const KdTree sort(lattice, config_for("sweep=sort"));
+  const KdTree events(lattice, config_for("sweep=events"));
+  EXPECT_EQ(sort.structure_hash(), events.structure_hash());
+}
+
+/// Every triangle that exactly meets a leaf's closed box is listed in that leaf.
+void expect_no_triangle_lost(const Scene& scene, const KdTreeData& data) {
+  std::size_t leaves = 0;
+  for_each_kd_leaf(data, [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
+    ++leaves;
+    std::vector<bool> listed(scene.mesh.size(), false);
+    for (std::uint32_t i = 0; i < count; ++i)
+      if (data.prims[first + i] < scene.mesh.size()) listed[data.prims[first + i]] = true;
+    for (std::uint32_t t = 0; t < scene.mesh.size(); ++t) {
+      if (listed[t]) continue;
+      const auto& tri = scene.mesh.triangles[t];
+      const auto& v = scene.mesh.vertices;
+      ASSERT_FALSE(exact_triangle_intersects_box(v[tri[0]], v[tri[1]], v[tri[2]], box))
+          << "triangle " << t << " lost from a leaf";
+    }
+  });
+  EXPECT_GT(leaves, 1u);
+}
+
+TEST(KdTree, ExactClippingLosesNoTriangle) {
+  for (const auto& scene : {make("soup:n=600"), make("walls:n=6,angle=30"), lattice_scene()}) {
+    for (const std::string params : {"clip=exact", "clip=exact,builder=midpoint", "clip=exact,builder=median"}) {
+      const KdTree tree(scene, config_for(params));
+      expect_no_triangle_lost(*scene, tree.data());
+    }
+  }
+}
+
+TEST(KdTree, ExactClippingListsOnlyTrianglesThatMeetTheLeaf) {
+  const auto scene = make("soup:n=600");
+  const KdTree tree(scene, config_for("clip=exact"));
+  for_each_kd_leaf(tree.data(), [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const auto& tri = scene->mesh.triangles[tree.data().prims[first + i]];
+      const auto& v = scene->mesh.vertices;
+      EXPECT_TRUE(exact_triangle_intersects_box(v[tri[0]], v[tri[1]], v[tri[2]], box));
+    }
+  });
+}
+
+/// Adversarial rays built from the tree's own split planes: axis-parallel rays whose origins lie
+/// on split planes, and rays running along cell faces and edges, against brute force.
+std::vector<Ray> split_plane_rays(const KdTreeData& data) {
+  std::vector<Ray> rays;
+  const Bounds3f b = data.bounds;
+  const Vec3f c = b.center(), d = b.diagonal();
+  for (std::size_t i = 0; i < data.nodes.size() && rays.size() < 3000; ++i) {
+    const KdNode& n = data.nodes[i];
+    if (n.is_leaf()) continue;
+    const int a = n.axis(), a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+    for (int k = 0; k < 3; ++k) {
+      Vec3f o = c;
+      o[a] = n.split;
+      o[a1] = b.lo[a1] + d[a1] * (0.17f + 0.31f * float(k));
+      o[a2] = b.lo[a2] - d[a2];
+      Vec3f dir(0.0f);
+      dir[a2] = 1.0f;
+      rays.push_back({o, dir});  // in the split plane, axis-parallel
+      o[a2] = b.lo[a2] + d[a2] * (0.23f + 0.29f * float(k));
+      o[a1] = b.lo[a1] - d[a1];
+      dir = Vec3f(0.0f);
+      dir[a1] = 1.0f;
+      rays.push_back({o, dir});
+      Vec3f dir2(0.0f);
+      dir2[a] = (k % 2) ? 1.0f : -1.0f;  // origin on the plane, crossing it
+      rays.push_back({Vec3f(o.x, o.y, o.z) + Vec3f(0.0f), dir2});
+      rays.back().org[a1] = c[a1] + 0.1f * d[a1] * float(k - 1);
+      Vec3f diag(0.0f);  // in the plane, oblique
+      diag[a1] = 0.6f;
+      diag[a2] = 0.8f;
+      Vec3f o2 = b.lo - d * 0.1f;
+      o2[a] = n.split;
+      rays.push_back({o2, diag});
+    }
+  }
+  return rays;
+}
+
+void expect_matches_brute(const std::shared_ptr<const Scene>& scene, const std::string& spec, const std::vector<Ray>& rays) {
+  const auto brute = make_accelerator("brute", scene);
+  const auto accel = make_accelerator(spec, scene);
+  const TraceResult ref = trace_rays(*brute, rays, TraceOptions{1, false, false});
+  const TraceResult got = trace_rays(*accel, rays, TraceOptions{1, false, false});
+  const double diag = length(Vec3d(scene->bounds().diagonal()));
+  const HitComparison c = compare_hits(rays, got.hits, ref.hits, diag);
+  EXPECT_EQ(c.mismatches, 0u) << spec << " on " << scene->spec << ": " << c.missed_hits << " missed, " << c.false_hits
+                              << " false, " << c.wrong_t << " wrong t of " << c.rays;
+  EXPECT_GT(ref.hit_count, 0u);
+  const TraceResult ref_o = trace_rays(*brute, rays, TraceOptions{1, false, true});
+  const TraceResult got_o = trace_rays(*accel, rays, TraceOptions{1, false, true});
+  EXPECT_EQ(compare_occlusion(got_o.blocked, ref_o.blocked).mismatches, 0u) << spec << " (occlusion)";
+}
+
+TEST(KdTree, RaysInAndAlongSplitPlanesAgreeWithBruteForce) {
+  for (const auto& scene : {lattice_scene(), make("soup:n=800"), make("walls:n=6,angle=30")}) {
+    const KdTree probe(scene, config_for(""));
+    const auto rays = split_plane_rays(probe.data());
+    ASSERT_FALSE(rays.empty());
+    for (const std::string params : {"", "clip=none", "clip=bbox", "builder=midpoint", "builder=median",
+                                     "traversal=recursive", "mailbox=on"}) {
+      expect_matches_brute(scene, params.empty() ? "kdtree" : "kdtree:" + params, rays);
+    }
+  }
+}
+
+TEST(KdTree, CostParametersShapeTheTree) {
+  const auto scene = make("soup:n=2000");
+  const KdTree cheap_trav(scene, config_for("c_trav=1,c_isect=80"));
+  const KdTree dear_trav(scene, config_for("c_trav=1,c_isect=1.5"));
+  EXPECT_GT(cheap_trav.stats().nodes, dear_trav.stats().nodes);
+  const KdTree capped(scene, config_for("max_depth=3"));
+  EXPECT_LE(capped.data().depth, 3);
+}
+
+TEST(KdTree, RejectsBadParameters) {
+  const auto scene = make("soup:n=50");
+  EXPECT_ANY_THROW(make_accelerator("kdtree:builder=magic", scene));
+  EXPECT_ANY_THROW(make_accelerator("kdtree:clip=approx", scene));
+  EXPECT_ANY_THROW(make_accelerator("kdtree:c_isect=-1", scene));
+}
+
+}  // namespace
+}  // namespace raylab
