@@ -4,7 +4,9 @@
 /// nest, and a TransformedPrimitive (transformed_primitive.h) wraps any primitive in a
 /// transform. Dynamic dispatch lives here, at the primitive/aggregate boundary only; inside an
 /// accelerator the loops over nodes and shapes are templates.
+#include <cmath>
 #include <cstddef>
+#include <limits>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -31,6 +33,14 @@ class Primitive {
   virtual bool occluded(const Ray& ray) const = 0;
   virtual bool occluded(const Ray& ray, RayCounters& counters) const = 0;
 };
+
+/// The ray an any-hit query hands to kernels, which accept t < tmax: tmax moved up one float so
+/// that a hit exactly at the query's tmax counts, as occluded()'s closed interval requires.
+inline Ray closed_for_any_hit(const Ray& ray) {
+  Ray closed = ray;
+  closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+  return closed;
+}
 
 /// What an accelerator reports about itself next to timings.
 struct AccelStats {

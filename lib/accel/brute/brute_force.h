@@ -33,8 +33,7 @@ class BruteForce final : public AggregateBase<BruteForce<Kernel>> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    Ray closed = ray;  // kernels accept t < tmax; an any-hit query includes tmax itself
-    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Ray closed = closed_for_any_hit(ray);
     auto ctx = Kernel::prepare(closed);
     Hit hit;
     const auto n = static_cast<unsigned>(scene_->primitive_count());

@@ -30,8 +30,7 @@ class BspTree final : public AggregateBase<BspTree> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    Ray closed = ray;
-    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
     const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
     return bsp_traverse<WatertightKernel, true>(view, closed, hit, counters);

@@ -1,5 +1,6 @@
 #include "accel/grid/uniform_grid.h"
 
+#include "accel/common/structure_hash.h"
 #include "geometry/input_error.h"
 
 namespace raylab {
@@ -15,5 +16,7 @@ UniformGrid::UniformGrid(std::shared_ptr<const Scene> scene, const GridConfig& c
   extent_ = d.x + d.y + d.z;
   lists_ = place_all_primitives(*scene_, grid_, config_.placement, margin);
 }
+
+std::optional<std::uint64_t> UniformGrid::structure_hash() const { return fnv1a(lists_.refs, fnv1a(lists_.offsets)); }
 
 }  // namespace raylab

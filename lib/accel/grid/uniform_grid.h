@@ -25,6 +25,7 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   std::string name() const override { return "grid"; }
   /// bytes: the offsets and the index array; nodes: cells.
   AccelStats stats() const override { return {lists_.bytes(), grid_.cell_count(), -1.0}; }
+  std::optional<std::uint64_t> structure_hash() const override;
   Bounds3f bounds() const override { return bounds_; }
 
   const GridGeometry& geometry() const { return grid_; }
@@ -63,8 +64,7 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
 
   template <class Counters, bool kMailbox>
   bool any(const Ray& ray, Counters& counters) const {
-    Ray closed = ray;  // kernels accept t < tmax; an any-hit query includes tmax itself
-    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Ray closed = closed_for_any_hit(ray);
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(grid_.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;

@@ -1,3 +1,4 @@
+#include "accel/common/structure_hash.h"
 #include "accel/kdtree/kdtree.h"
 
 namespace raylab {
@@ -11,8 +12,8 @@ AccelStats KdTree::stats() const {
 }
 
 std::optional<std::uint64_t> KdTree::structure_hash() const {
-  std::uint64_t h = spatial_fnv1a(data_.nodes.data(), data_.nodes.size() * sizeof(KdNode));
-  return spatial_fnv1a(data_.prims.data(), data_.prims.size() * sizeof(std::uint32_t), h);
+  std::uint64_t h = fnv1a(data_.nodes);
+  return fnv1a(data_.prims, h);
 }
 
 namespace {

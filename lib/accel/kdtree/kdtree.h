@@ -9,13 +9,6 @@
 
 namespace raylab {
 
-/// FNV-1a over raw bytes, continuing from `h`.
-inline std::uint64_t spatial_fnv1a(const void* data, std::size_t bytes, std::uint64_t h = 14695981039346656037ull) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  return h;
-}
-
 class KdTree final : public AggregateBase<KdTree> {
  public:
   /// `scene` must not be instanced.
@@ -38,8 +31,7 @@ class KdTree final : public AggregateBase<KdTree> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    Ray closed = ray;  // kernels accept t < tmax; an any-hit query includes tmax itself
-    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
     return dispatch<true>(closed, hit, counters);
   }

@@ -90,8 +90,7 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
 
   template <class Counters, bool kMailbox>
   bool any(const Ray& ray, Counters& counters) const {
-    Ray closed = ray;  // kernels accept t < tmax; an any-hit query includes tmax itself
-    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Ray closed = closed_for_any_hit(ray);
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(levels_[0].geom.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;

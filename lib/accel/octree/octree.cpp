@@ -1,3 +1,4 @@
+#include "accel/common/structure_hash.h"
 #include "accel/octree/octree.h"
 
 #include "accel/kdtree/kdtree.h"
@@ -13,8 +14,8 @@ AccelStats Octree::stats() const {
 }
 
 std::optional<std::uint64_t> Octree::structure_hash() const {
-  const std::uint64_t h = spatial_fnv1a(data_.nodes.data(), data_.nodes.size() * sizeof(OctNode));
-  return spatial_fnv1a(data_.prims.data(), data_.prims.size() * sizeof(std::uint32_t), h);
+  const std::uint64_t h = fnv1a(data_.nodes);
+  return fnv1a(data_.prims, h);
 }
 
 OctreeConfig read_octree_config(SpecReader& r) {

@@ -29,8 +29,7 @@ class Octree final : public AggregateBase<Octree> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    Ray closed = ray;
-    closed.tmax = std::nextafter(ray.tmax, std::numeric_limits<float>::infinity());
+    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
     return dispatch<true>(closed, hit, counters);
   }
