@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "geometry/input_error.h"
+#include "geometry/triangle_mesh.h"
 #include "rays/random.h"
 #include "rays/sampling.h"
 
@@ -49,6 +50,14 @@ std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std
   const std::vector<std::uint32_t> weld = weld_vertices(mesh);
   std::vector<Incidence> inc;
   inc.reserve(3 * mesh.size());
+  // Welded vertices of zero-area triangles (decided exactly). No kernel hits such a triangle, so
+  // the surface has a crack along it: features touching one are not sampled (see below).
+  std::vector<bool> touches_degenerate(mesh.vertices.size(), false);
+  for (std::uint32_t t = 0; t < mesh.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    if (is_degenerate_exact(mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]))
+      for (int c = 0; c < 3; ++c) touches_degenerate[weld[tri[c]]] = true;
+  }
   for (std::uint32_t t = 0; t < mesh.size(); ++t) {
     if (face_cross(mesh, t) == Vec3d(0.0)) continue;
     const auto& tri = mesh.triangles[t];
@@ -86,7 +95,11 @@ std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std
     const double theta = std::acos(std::clamp(min_cos, -1.0, 1.0));
     normals[f] = normal;
     cones[f] = std::clamp(0.5 * (0.5 * std::numbers::pi - theta), 0.0, max_cone);
-    if (theta <= max_theta) eligible.push_back(f);
+    const std::uint64_t key = inc[starts[f]].feature;
+    const bool cracked = feature == MeshFeature::vertex
+                             ? touches_degenerate[key]
+                             : (touches_degenerate[key >> 32] || touches_degenerate[key & 0xffffffffu]);
+    if (theta <= max_theta && !cracked) eligible.push_back(f);
   }
   if (eligible.empty())
     for (std::size_t f = 0; f < features; ++f) eligible.push_back(f);

@@ -30,7 +30,8 @@ enum class MeshFeature { edge, vertex };
 /// triangles (any adjacent face normal if the mean is zero). The direction w is uniform in the
 /// cone about −n of half-angle min(30°, (90° − θ)/2), θ the largest angle between n and an
 /// adjacent face normal, so the ray never grazes an adjacent face. Features with θ > 80° (folds
-/// and fins, seen in silhouette from every direction) are skipped unless every feature is one.
+/// and fins, seen in silhouette from every direction) and features touching a zero-area
+/// triangle (never hit, so the surface is cracked there) are skipped unless every feature is one.
 /// The origin is
 /// o = p − δ·w, δ = `distance`, rounded to float; the direction is p − o in double, rounded;
 /// tmin = 0, tmax = inf. Deterministic for a given seed.
