@@ -84,7 +84,8 @@ ExactFirstHit& ExactFirstHit::operator=(ExactFirstHit&&) noexcept = default;
 
 bool ExactFirstHit::offer_triangle(unsigned prim, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
   Impl& s = *impl_;
-  if (!is_valid(s.ray)) return false;
+  // tmin = +inf (valid only with tmax = +inf) leaves no t to hit, and exact numbers cannot hold it.
+  if (!is_valid(s.ray) || std::isinf(s.ray.tmin)) return false;
   const FloatModeScope ieee(false);
   const Epick::Point_3 a = to_epick(p0), b = to_epick(p1), c = to_epick(p2);
   if (CGAL::collinear(a, b, c)) return false;  // CGAL's triangle predicates require non-degenerate input
@@ -121,7 +122,7 @@ bool ExactFirstHit::offer_triangle(unsigned prim, const Vec3f& p0, const Vec3f& 
 
 bool ExactFirstHit::offer_sphere(unsigned prim, const Sphere& sphere) {
   Impl& s = *impl_;
-  if (!is_valid(s.ray) || !(sphere.radius > 0.0f)) return false;
+  if (!is_valid(s.ray) || std::isinf(s.ray.tmin) || !(sphere.radius > 0.0f)) return false;  // as above
   const FloatModeScope ieee(false);
   using R = ExactReal;
   const R ox = R(double(s.ray.org.x)) - R(double(sphere.center.x));

@@ -10,7 +10,28 @@ namespace raylab {
 
 class InputError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  /// Control characters of `message` (a newline or NUL copied from a bad spec or file) are
+  /// written as \xNN, so the message is always one line (found by the scene-spec fuzzer).
+  explicit InputError(const std::string& message) : std::runtime_error(one_line(message)) {}
+  explicit InputError(const char* message) : InputError(std::string(message)) {}
+
+ private:
+  static std::string one_line(const std::string& s) {
+    std::string out;
+    out.reserve(s.size());
+    for (const char c : s) {
+      const auto u = static_cast<unsigned char>(c);
+      if (u < 0x20 || u == 0x7f) {
+        static const char* hex = "0123456789abcdef";
+        out += "\\x";
+        out += hex[u >> 4];
+        out += hex[u & 15];
+      } else {
+        out += c;
+      }
+    }
+    return out;
+  }
 };
 
 }  // namespace raylab

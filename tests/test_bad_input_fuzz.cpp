@@ -1,0 +1,53 @@
+// Replays every seed input (tests/fuzz/corpus/<target>/) and every crash input the fuzzers
+// found (tests/fuzz/regressions/<target>/) through the fuzz targets' own code
+// (tests/fuzz/fuzz_targets.h), so fixed crashes stay fixed in the normal (and sanitized) suite
+// without clang or libFuzzer.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "fuzz/fuzz_targets.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kFuzz = fs::path(RAYLAB_TEST_DATA).parent_path() / "fuzz";
+
+std::size_t replay(const std::string& target, const std::function<void(const std::uint8_t*, std::size_t)>& run) {
+  std::size_t n = 0;
+  for (const char* kind : {"corpus", "regressions"}) {
+    const fs::path dir = kFuzz / kind / target;
+    if (!fs::is_directory(dir)) continue;
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (!e.is_regular_file() || e.path().filename().string()[0] == '.') continue;
+      std::ifstream in(e.path(), std::ios::binary);
+      const std::vector<char> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+      SCOPED_TRACE(e.path().string());
+      run(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size());
+      ++n;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+TEST(FuzzRegressions, MeshLoaders) {
+  for (const std::string ext : {"off", "obj", "ply", "stl"})
+    EXPECT_GT(replay("mesh_" + ext, [&](const std::uint8_t* d, std::size_t s) { raylab::fuzz::mesh_loader(d, s, "." + ext); }), 0u) << ext;
+}
+
+TEST(FuzzRegressions, SceneSpec) {
+  EXPECT_GT(replay("scene_spec", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::scene_spec(d, s); }), 0u);
+}
+
+TEST(FuzzRegressions, RayFile) {
+  EXPECT_GT(replay("ray_file", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::ray_file(d, s); }), 0u);
+}
+
+TEST(FuzzRegressions, BuildAndTrace) {
+  EXPECT_GT(replay("build_trace", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::build_and_trace(d, s); }), 0u);
+}
