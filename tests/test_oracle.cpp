@@ -129,7 +129,9 @@ TEST_P(OracleSuite, AgreesWithTheExactOracleWithinItsStatedBound) {
         << (c.first_mismatches.empty() ? -1 : static_cast<long>(c.first_mismatches[0]));
     // Camera rays must see the scene, or the comparison proves little. (Diffuse and shadow rays
     // off a convex closed object legitimately hit nothing.)
-    if (parse_spec(ray_spec).name == "primary") EXPECT_GT(ref.exact.hit_count, 0u) << ray_spec << " on " << scene_spec;
+    if (parse_spec(ray_spec).name == "primary") {
+      EXPECT_GT(ref.exact.hit_count, 0u) << ray_spec << " on " << scene_spec;
+    }
   }
 }
 
