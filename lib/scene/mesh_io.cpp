@@ -21,12 +21,13 @@
 #include <vector>
 
 #include "geometry/input_error.h"
+#include "scene/openmesh_conversion.h"
 
 namespace raylab {
 namespace {
 
 using PolyMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
-using TriMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+using TriMesh = OpenMeshTriMesh;
 
 constexpr std::uint64_t kMaxVertices = std::numeric_limits<std::uint32_t>::max();
 
@@ -643,18 +644,7 @@ TriangleMesh load_mesh(const std::string& path, MeshLoadReport* report) {
 void save_mesh(const TriangleMesh& mesh, const std::string& path, bool binary) {
   if (format_of(path) == Format::Unknown) fail(path, "unknown mesh format (expected .off, .obj, .ply or .stl)");
   silence_openmesh();
-  TriMesh m;
-  std::vector<TriMesh::VertexHandle> vh;
-  vh.reserve(mesh.vertices.size());
-  for (const auto& v : mesh.vertices) vh.push_back(m.add_vertex(TriMesh::Point(v.x, v.y, v.z)));
-  for (const auto& t : mesh.triangles) {
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    if (!m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]).is_valid()) {
-      // A non-manifold triangle keeps its geometry on duplicated corners (as OpenMesh's importer does).
-      const TriMesh::Point p0 = m.point(vh[t[0]]), p1 = m.point(vh[t[1]]), p2 = m.point(vh[t[2]]);  // copies: add_vertex may reallocate
-      m.add_face(m.add_vertex(p0), m.add_vertex(p1), m.add_vertex(p2));
-    }
-  }
+  TriMesh m = to_openmesh(mesh);
   OpenMesh::IO::Options opt;
   if (binary) opt += OpenMesh::IO::Options::Binary;
   std::lock_guard lock(openmesh_mutex());

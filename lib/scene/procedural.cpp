@@ -1,6 +1,5 @@
 #include "scene/procedural.h"
 
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>
@@ -11,11 +10,12 @@
 #include <string>
 
 #include "geometry/input_error.h"
+#include "scene/openmesh_conversion.h"
 
 namespace raylab {
 namespace {
 
-using TriMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+using TriMesh = OpenMeshTriMesh;
 
 constexpr std::int64_t kMaxTriangles = std::int64_t{1} << 27;
 
@@ -40,25 +40,6 @@ void append_box(TriangleMesh& mesh, const Vec3d& lo, const Vec3d& hi, const Affi
     mesh.triangles.push_back({base + q[0], base + q[1], base + q[2]});
     mesh.triangles.push_back({base + q[0], base + q[2], base + q[3]});
   }
-}
-
-/// OpenMesh copy of a triangle mesh. A triangle OpenMesh cannot attach (a non-manifold edge)
-/// gets its own copies of its corners, as OpenMesh's importer does; triangles naming a vertex
-/// twice are left out.
-TriMesh to_openmesh(const TriangleMesh& mesh) {
-  TriMesh m;
-  m.reserve(mesh.vertices.size(), mesh.size() * 3 / 2, mesh.size());
-  std::vector<TriMesh::VertexHandle> vh;
-  vh.reserve(mesh.vertices.size());
-  for (const auto& v : mesh.vertices) vh.push_back(m.add_vertex(TriMesh::Point(v.x, v.y, v.z)));
-  for (const auto& t : mesh.triangles) {
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    if (!m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]).is_valid()) {
-      const TriMesh::Point p0 = m.point(vh[t[0]]), p1 = m.point(vh[t[1]]), p2 = m.point(vh[t[2]]);  // copies: add_vertex may reallocate
-      m.add_face(m.add_vertex(p0), m.add_vertex(p1), m.add_vertex(p2));
-    }
-  }
-  return m;
 }
 
 TriangleMesh from_openmesh(const TriMesh& m) {
