@@ -1,0 +1,78 @@
+#pragma once
+/// `bvh`: the lecture's bounding volume hierarchy over a scene's triangles and spheres
+/// (bvh_build.h for the builders, bvh_traversal.h for traversal). The robust default pairs Ize's
+/// conservative box test with the watertight kernel; `robust=off` is the fast variant.
+#include <memory>
+
+#include "accel/bvh/bvh_build.h"
+#include "accel/bvh/bvh_traversal.h"
+#include "accel/common/accel_factory.h"
+#include "scene/scene_primitives.h"
+
+namespace raylab {
+
+class Bvh final : public AggregateBase<Bvh> {
+ public:
+  /// `scene` must not be instanced.
+  Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config);
+
+  std::string name() const override { return "bvh"; }
+  AccelStats stats() const override;
+  Bounds3f bounds() const override { return bounds_; }
+  std::optional<std::uint64_t> structure_hash() const override;
+
+  const Bvh2& tree() const { return tree_; }
+  const BvhConfig& config() const { return config_; }
+
+  template <class Counters>
+  bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
+    const bool found = config_.robust ? trace<WatertightKernel, true, false>(ray, hit, counters)
+                                      : trace<MollerTrumboreKernel, false, false>(ray, hit, counters);
+    if (found) ray.tmax = hit.t;
+    return found;
+  }
+
+  template <class Counters>
+  bool occluded_impl(const Ray& ray, Counters& counters) const {
+    const Ray closed = closed_for_any_hit(ray);
+    Hit hit;
+    return config_.robust ? trace<WatertightKernel, true, true>(closed, hit, counters)
+                          : trace<MollerTrumboreKernel, false, true>(closed, hit, counters);
+  }
+
+ private:
+  template <class Kernel, bool kRobust, bool kAnyHit, class Counters>
+  bool trace(const Ray& ray, Hit& hit, Counters& counters) const {
+    if (tree_.nodes.empty()) return false;
+    typename Kernel::Context ctx = Kernel::prepare(ray);
+    const Scene& scene = *scene_;
+    const std::uint32_t* prims = tree_.prims.data();
+    float closest = ray.tmax;
+    return traverse_bvh2<kRobust, kAnyHit>(
+        tree_.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
+          bool found = false;
+          for (std::uint32_t i = first; i < first + count; ++i) {
+            if (intersect_scene_primitive<Kernel>(scene, prims[i], ctx, hit, counters)) {
+              found = true;
+              if constexpr (kAnyHit) return true;
+            }
+          }
+          t = Kernel::closest(ctx);
+          return found;
+        });
+  }
+
+  std::shared_ptr<const Scene> scene_;
+  BvhConfig config_;
+  Bvh2 tree_;
+  Bounds3f bounds_;
+  double build_sah_cost_ = 0.0;
+};
+
+/// Reads a BvhConfig from a spec's parameters (shared with the experiments).
+BvhConfig read_bvh_config(SpecReader& reader);
+
+/// The factory entry: parameters, accuracy bound and oracle variants.
+AccelKind make_bvh_kind();
+
+}  // namespace raylab

@@ -1,0 +1,222 @@
+#include "accel/bvh/bvh_build.h"
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+#include "accel/kdtree/sah_cost.h"
+
+namespace raylab {
+namespace {
+
+/// The references of a subtree: ids[begin, end) with their boxes and centroids.
+struct BuildRefs {
+  const std::vector<Bounds3f>& boxes;
+  std::vector<Vec3f> centroids;
+  std::vector<std::uint32_t> ids;
+};
+
+struct Split {
+  int axis = -1;
+  std::size_t mid = 0;  ///< ids[begin, mid) go left after partitioning
+  int bin = 0;          ///< binned: references in bins below `bin` go left
+  double cost = std::numeric_limits<double>::infinity();
+};
+
+Bounds3f bounds_of(const BuildRefs& r, std::size_t begin, std::size_t end, Bounds3f* centroid_bounds) {
+  Bounds3f b, c;
+  for (std::size_t i = begin; i < end; ++i) {
+    b.extend(r.boxes[r.ids[i]]);
+    c.extend(r.centroids[r.ids[i]]);
+  }
+  *centroid_bounds = c;
+  return b;
+}
+
+/// Binned SAH over the centroid bounds (Wald 2007): `bins` equal bins per axis.
+Split find_binned_split(const BuildRefs& r, std::size_t begin, std::size_t end, const Bounds3f& node,
+                        const Bounds3f& cb, const BvhConfig& config) {
+  Split best;
+  const int bins = config.bins;
+  const double node_area = surface_area_d(node);
+  if (!(node_area > 0.0)) return best;
+  for (int axis = 0; axis < 3; ++axis) {
+    const float lo = cb.lo[axis], extent = cb.hi[axis] - cb.lo[axis];
+    if (!(extent > 0.0f)) continue;
+    const float scale = static_cast<float>(bins) / extent;
+    std::vector<Bounds3f> bin_box(bins);
+    std::vector<std::size_t> bin_count(bins, 0);
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::uint32_t id = r.ids[i];
+      const int b = std::min(bins - 1, static_cast<int>((r.centroids[id][axis] - lo) * scale));
+      bin_box[b].extend(r.boxes[id]);
+      ++bin_count[b];
+    }
+    std::vector<double> right_area(bins, 0.0);
+    std::vector<std::size_t> right_count(bins, 0);
+    Bounds3f acc;
+    std::size_t n = 0;
+    for (int b = bins - 1; b > 0; --b) {
+      acc.extend(bin_box[b]);
+      n += bin_count[b];
+      right_area[b] = surface_area_d(acc);
+      right_count[b] = n;
+    }
+    acc = Bounds3f();
+    n = 0;
+    for (int b = 0; b + 1 < bins; ++b) {
+      acc.extend(bin_box[b]);
+      n += bin_count[b];
+      if (n == 0 || right_count[b + 1] == 0) continue;
+      const double cost = config.cost.c_trav + config.cost.c_isect *
+                                                   (surface_area_d(acc) * double(n) +
+                                                    right_area[b + 1] * double(right_count[b + 1])) /
+                                                   node_area;
+      if (cost < best.cost) {
+        best.cost = cost;
+        best.axis = axis;
+        best.mid = begin + n;
+        best.bin = b + 1;
+      }
+    }
+  }
+  return best;
+}
+
+class Builder {
+ public:
+  Builder(const std::vector<Bounds3f>& boxes, const BvhConfig& config) : refs_{boxes, {}, {}}, config_(config) {
+    refs_.centroids.resize(boxes.size());
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      refs_.centroids[i] = boxes[i].empty() ? Vec3f(0.0f) : boxes[i].center();
+    refs_.ids.resize(boxes.size());
+    std::iota(refs_.ids.begin(), refs_.ids.end(), 0u);
+  }
+
+  Bvh2 build() {
+    Bvh2 bvh;
+    bvh.primitive_count = refs_.boxes.size();
+    if (refs_.ids.empty()) return bvh;
+    nodes_.emplace_back();
+    build_node(0, 0, refs_.ids.size(), 0);
+    bvh.nodes = std::move(nodes_);
+    bvh.prims = std::move(refs_.ids);
+    return bvh;
+  }
+
+ private:
+  void make_leaf(std::uint32_t node, std::size_t begin, std::size_t end) {
+    nodes_[node].first = static_cast<std::uint32_t>(begin);
+    nodes_[node].count = static_cast<std::uint32_t>(end - begin);
+  }
+
+  void build_node(std::uint32_t node, std::size_t begin, std::size_t end, int depth) {
+    Bounds3f cb;
+    nodes_[node].box = bounds_of(refs_, begin, end, &cb);
+    const std::size_t n = end - begin;
+    if (n == 1) return make_leaf(node, begin, end);
+    std::size_t mid = begin + n / 2;
+    const int axis = cb.largest_axis();
+    auto by_axis = [&](int a) {
+      return [this, a](std::uint32_t x, std::uint32_t y) {
+        const float cx = refs_.centroids[x][a], cy = refs_.centroids[y][a];
+        return cx < cy || (cx == cy && x < y);
+      };
+    };
+    auto* first = refs_.ids.data() + begin;
+    auto* last = refs_.ids.data() + end;
+    const BvhBuilder builder = depth >= kBvhMaxDepth - 32 ? BvhBuilder::median : config_.builder;
+    switch (builder) {
+      case BvhBuilder::midpoint: {
+        if (n <= static_cast<std::size_t>(config_.max_leaf_size)) return make_leaf(node, begin, end);
+        const float m = cb.center()[axis];
+        auto* it = std::partition(first, last, [&](std::uint32_t id) { return refs_.centroids[id][axis] < m; });
+        if (it == first || it == last) {
+          std::nth_element(first, first + n / 2, last, by_axis(axis));
+        } else {
+          mid = static_cast<std::size_t>(it - refs_.ids.data());
+        }
+        break;
+      }
+      case BvhBuilder::median:
+        if (n <= static_cast<std::size_t>(config_.max_leaf_size)) return make_leaf(node, begin, end);
+        std::nth_element(first, first + n / 2, last, by_axis(axis));
+        break;
+      default: {
+        const Split s = find_binned_split(refs_, begin, end, nodes_[node].box, cb, config_);
+        const double leaf_cost = config_.cost.c_isect * static_cast<double>(n);
+        if (n <= static_cast<std::size_t>(config_.max_leaf_size) && !(s.cost < leaf_cost))
+          return make_leaf(node, begin, end);
+        if (s.axis < 0) {
+          std::nth_element(first, first + n / 2, last, by_axis(axis));
+          break;
+        }
+        const float lo = cb.lo[s.axis];
+        const float scale = static_cast<float>(config_.bins) / (cb.hi[s.axis] - lo);
+        const int split_bin = s.bin;
+        auto* it = std::partition(first, last, [&](std::uint32_t id) {
+          return std::min(config_.bins - 1, static_cast<int>((refs_.centroids[id][s.axis] - lo) * scale)) < split_bin;
+        });
+        mid = static_cast<std::size_t>(it - refs_.ids.data());
+        break;
+      }
+    }
+    const auto left = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.emplace_back();
+    nodes_.emplace_back();
+    nodes_[node].first = left;
+    nodes_[node].count = 0;
+    build_node(left, begin, mid, depth + 1);
+    build_node(left + 1, mid, end, depth + 1);
+  }
+
+  BuildRefs refs_;
+  const BvhConfig& config_;
+  std::vector<Bvh2Node> nodes_;
+};
+
+}  // namespace
+
+Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
+  if (boxes.size() >= std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("build_bvh_over_boxes: more than 2^32 - 1 boxes");
+  return Builder(boxes, config).build();
+}
+
+Bvh2 build_bvh(const Scene& scene, const BvhConfig& config) {
+  std::vector<Bounds3f> boxes(scene.primitive_count());
+  for (std::size_t i = 0; i < boxes.size(); ++i) boxes[i] = scene.primitive_bounds(static_cast<unsigned>(i));
+  return build_bvh_over_boxes(boxes, config);
+}
+
+double bvh_sah_cost(const Bvh2& bvh, const BvhSahCost& cost) {
+  if (bvh.nodes.empty()) return 0.0;
+  const double root = surface_area_d(bvh.nodes[0].box);
+  if (!(root > 0.0)) return 0.0;
+  double total = 0.0;
+  for (const Bvh2Node& n : bvh.nodes) {
+    const double a = surface_area_d(n.box) / root;
+    total += n.is_leaf() ? cost.c_isect * static_cast<double>(n.count) * a : cost.c_trav * a;
+  }
+  return total;
+}
+
+int bvh_depth(const Bvh2& bvh) {
+  if (bvh.nodes.empty()) return 0;
+  int deepest = 0;
+  std::vector<std::pair<std::uint32_t, int>> todo = {{0u, 0}};
+  while (!todo.empty()) {
+    const auto [i, d] = todo.back();
+    todo.pop_back();
+    const Bvh2Node& n = bvh.nodes[i];
+    if (n.is_leaf()) {
+      deepest = std::max(deepest, d);
+    } else {
+      todo.push_back({n.first, d + 1});
+      todo.push_back({n.first + 1, d + 1});
+    }
+  }
+  return deepest;
+}
+
+}  // namespace raylab

@@ -1,0 +1,46 @@
+#pragma once
+/// Parameters of the BVH (`bvh:key=value,...`); the factory fills them and rejects others.
+#include <cstddef>
+
+namespace raylab {
+
+enum class BvhBuilder {
+  midpoint,  ///< the spatial middle of the centroid bounds' longest axis
+  median,    ///< the median centroid along the centroid bounds' longest axis
+  sweep,     ///< full-sweep SAH over all three axes (the lecture's "sweep build")
+  binned,    ///< binned SAH (Wald 2007), parallel with TBB
+  spatial,   ///< SBVH: binned SAH plus spatial splits (Stich, Friedrich and Dietrich 2009)
+};
+
+/// The SAH of a BVH (MacDonald and Booth 1990; the lecture's Cost = N_A·S_A + N_B·S_B):
+///   node cost = c_trav + c_isect·(N_A·SA(A) + N_B·SA(B)) / SA(node),   leaf cost = c_isect·N.
+struct BvhSahCost {
+  double c_trav = 1.0;
+  double c_isect = 1.0;
+};
+
+struct BvhConfig {
+  BvhBuilder builder = BvhBuilder::binned;
+  /// Children per node of the traversed tree: 2 (BVH2, the lecture's stack traversal) or a wide
+  /// tree collapsed from the binary one, 4 or 8 (SIMD box tests).
+  int width = 2;
+  /// The builder makes a leaf of at most this many primitives (SAH may stop earlier).
+  int max_leaf_size = 4;
+  /// SAH bins per axis (binned and spatial builders).
+  int bins = 32;
+  BvhSahCost cost;
+  /// SBVH: a spatial split is tried only where the object split's child overlap exceeds
+  /// alpha·SA(root) (Stich et al. 2009 §4.3).
+  double spatial_alpha = 1e-5;
+  /// SBVH: the references may grow to at most (1 + max_duplication)·N, N the primitive count.
+  double max_duplication = 1.0;
+  /// Post-build reinsertion optimisation (Bittner, Hapala and Havran 2013).
+  bool reinsert = false;
+  /// Ize's conservative slab test and the watertight triangle kernel; off gives the `fast`
+  /// variant (plain slab test, Moller-Trumbore), held by the oracle suite to its stated bound.
+  bool robust = true;
+  /// Build threads; 0 means every hardware thread.
+  int threads = 0;
+};
+
+}  // namespace raylab
