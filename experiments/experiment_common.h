@@ -41,13 +41,15 @@ inline Options parse_options(int argc, char** argv, const std::string& descripti
   return o;
 }
 
-/// Single-thread trace time per ray, in nanoseconds: the trace is repeated until at least
-/// `min_seconds` have been spent and the fastest repetition is kept.
-inline double ns_per_ray(const Primitive& accel, const std::vector<Ray>& rays, bool any_hit, double min_seconds = 0.2) {
+/// Trace time per ray on `threads` threads (single-thread by default), in nanoseconds of wall
+/// clock: the trace is repeated until at least `min_seconds` have been spent and the fastest
+/// repetition is kept.
+inline double ns_per_ray(const Primitive& accel, const std::vector<Ray>& rays, bool any_hit, double min_seconds = 0.2,
+                         int threads = 1) {
   double best = 1e300, spent = 0;
   int reps = 0;
   while (spent < min_seconds || reps < 2) {
-    const TraceResult r = trace_rays(accel, rays, TraceOptions{1, false, any_hit});
+    const TraceResult r = trace_rays(accel, rays, TraceOptions{threads, false, any_hit});
     best = std::min(best, r.seconds);
     spent += r.seconds;
     ++reps;

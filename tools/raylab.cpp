@@ -192,6 +192,7 @@ int run_trace(const TraceCommand& o) {
   j["nodes_per_ray"] = n > 0 ? static_cast<double>(counters.nodes) / n : 0.0;
   j["leaves_per_ray"] = n > 0 ? static_cast<double>(counters.leaves) / n : 0.0;
   j["prim_tests_per_ray"] = n > 0 ? static_cast<double>(counters.prim_tests) / n : 0.0;
+  j["prim_hits_per_test"] = counters.prim_tests > 0 ? static_cast<double>(counters.prim_hits) / counters.prim_tests : 0.0;
   j["mailbox_skips_per_ray"] = n > 0 ? static_cast<double>(counters.mailbox_skips) / n : 0.0;
   j["accel_bytes"] = stats.bytes;
   j["bytes_per_primitive"] = scene->total_primitive_count() > 0 ? stats.bytes / scene->total_primitive_count() : 0.0;

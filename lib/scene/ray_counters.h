@@ -9,15 +9,17 @@ struct RayCounters {
   std::uint64_t nodes = 0;          ///< interior nodes (or cells) visited
   std::uint64_t leaves = 0;         ///< leaves visited
   std::uint64_t prim_tests = 0;     ///< ray-primitive intersection tests
+  std::uint64_t prim_hits = 0;      ///< tests that found a hit closer than the closest so far (pbrt's "Ray/Tri hits")
   std::uint64_t mailbox_skips = 0;  ///< tests saved by a mailbox
 
   static constexpr bool enabled = true;
   void node() { ++nodes; }
   void leaf() { ++leaves; }
   void prim_test() { ++prim_tests; }
+  void prim_hit() { ++prim_hits; }
   void mailbox_skip() { ++mailbox_skips; }
   RayCounters& operator+=(const RayCounters& o) {
-    nodes += o.nodes; leaves += o.leaves; prim_tests += o.prim_tests; mailbox_skips += o.mailbox_skips;
+    nodes += o.nodes; leaves += o.leaves; prim_tests += o.prim_tests; prim_hits += o.prim_hits; mailbox_skips += o.mailbox_skips;
     return *this;
   }
 };
@@ -27,6 +29,7 @@ struct NoCounters {
   void node() {}
   void leaf() {}
   void prim_test() {}
+  void prim_hit() {}
   void mailbox_skip() {}
 };
 

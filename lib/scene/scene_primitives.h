@@ -22,6 +22,7 @@ inline bool intersect_scene_primitive(const Scene& scene, unsigned prim, typenam
     found = Kernel::intersect(ctx, prim, v[tri[0]], v[tri[1]], v[tri[2]], th);
   }
   if (!found) return false;
+  counters.prim_hit();
   hit.t = th.t;
   hit.u = th.u;
   hit.v = th.v;

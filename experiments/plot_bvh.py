@@ -1,0 +1,74 @@
+"""Plots of exp_bvh: the lecture's BVH-versus-kd-tree comparison, rotated walls, the time shares as
+scenes grow, and throughput relative to Embree."""
+import pathlib
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+
+def plot(out: pathlib.Path) -> None:
+    csv = out / "bvh.csv"
+    if not csv.exists():
+        return
+    df = pd.read_csv(csv)
+    fig, axes = plt.subplots(2, 2, figsize=(13, 9))
+
+    t = df[df["part"] == "table"]
+    if len(t):
+        ax = axes[0][0]
+        labels = [f"{s}\n{a}" for s, a in zip(t["scene"], t["accel"])]
+        x = np.arange(len(t))
+        ax.bar(x - 0.2, t["tests_per_ray"], width=0.4, label="tests / ray")
+        ax2 = ax.twinx()
+        ax2.bar(x + 0.2, 100 * t["hits_per_test"], width=0.4, color="tab:orange", label="hit rate %")
+        ax.set_xticks(x)
+        ax.set_xticklabels(labels, fontsize=6)
+        ax.set_ylabel("ray/triangle tests per ray")
+        ax2.set_ylabel("tests that hit (%)")
+        ax.set_title("BVH vs kd-tree: tests and hit rate (pbrt: 4.75x tests, 4.1% vs 16%)", fontsize=9)
+        ax.legend(loc="upper left", fontsize=7)
+        ax2.legend(loc="upper right", fontsize=7)
+
+    w = df[df["part"] == "walls"]
+    if len(w):
+        ax = axes[0][1]
+        for accel, g in w.groupby("accel"):
+            g = g.sort_values("param")
+            ax.plot(g["param"].astype(float), g["ns_per_ray"], marker="o", label=accel)
+        ax.set_xlabel("wall rotation (degrees)")
+        ax.set_ylabel("ns / ray (1 thread)")
+        ax.set_title("rotated walls (pbrt: 4.19x slower rotated)", fontsize=9)
+        ax.legend(fontsize=7)
+        ax.grid(True, alpha=0.3)
+
+    s = df[df["part"] == "shares"]
+    if len(s):
+        ax = axes[1][0]
+        x = np.arange(len(s))
+        ax.bar(x, 100 * s["traversal_share"], label="traversal (ours)")
+        ax.bar(x, 100 * s["tri_share"], bottom=100 * s["traversal_share"], label="triangle tests (ours)")
+        lecture = [27.4 / (27.4 + 10.2), 42.7 / (42.7 + 13.3), 74.7 / (74.7 + 13.3)]
+        ax.plot(x, [100 * v for v in lecture[: len(s)]], "k^--", label="lecture: accel / (accel + tri)")
+        ax.set_xticks(x)
+        ax.set_xticklabels([f"{n:.3g} tris" for n in s["triangles"]], fontsize=8)
+        ax.set_ylabel("% of ray-shooting time")
+        ax.set_title("where time goes as scenes grow (bvh, diffuse rays)", fontsize=9)
+        ax.legend(fontsize=7)
+
+    p = df[(df["part"] == "speed") & (df["threads"] == 1)]
+    if len(p):
+        ax = axes[1][1]
+        p = p.assign(kind=p["ray_spec"].str.split(":").str[0])
+        pivot = p.pivot_table(index=["scene", "kind"], columns="accel", values="throughput_vs_embree")
+        pivot.plot.barh(ax=ax, fontsize=6)
+        ax.axvline(1.0, color="k", linewidth=1)
+        ax.set_xlabel("throughput relative to Embree (1 thread)")
+        ax.set_title("against Embree", fontsize=9)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "bvh.png", dpi=110)
+    plt.close(fig)
