@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "accel/brute/brute_force.h"
+#include "accel/bvh/primitive_bvh.h"
 #include "accel/common/ray_sets.h"
 #include "accel/embree/embree_accel.h"
 #include "accel/exact/exact_oracle.h"
@@ -17,8 +18,8 @@
 namespace raylab {
 namespace {
 
-/// Builds `make(base)` once and places it under every instance transform of `scene` in a
-/// brute-force top level.
+/// Builds `make(base)` once and places it under every instance transform of `scene` in a BVH
+/// top level (PrimitiveBvh).
 std::unique_ptr<Aggregate> over_instances(const Scene& scene,
                                           const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make) {
   std::shared_ptr<const Primitive> inner = make(scene.base);
@@ -29,7 +30,7 @@ std::unique_ptr<Aggregate> over_instances(const Scene& scene,
       throw InputError("scene '" + scene.spec + "': instance " + std::to_string(i) + " has a singular transform");
     prims.push_back(std::make_shared<TransformedPrimitive>(inner, scene.instances[i], static_cast<unsigned>(i)));
   }
-  return std::make_unique<BruteForceOverPrimitives>(std::move(prims));
+  return std::make_unique<PrimitiveBvh>(std::move(prims));
 }
 
 std::unique_ptr<Aggregate> make_brute(std::shared_ptr<const Scene> scene, const std::string& kernel) {

@@ -46,8 +46,9 @@ struct AccelKind {
 };
 
 /// For an instanced scene: builds `make(scene.base)` once and places it under every instance
-/// transform (TransformedPrimitive) in a brute-force top level. Throws InputError for a singular
-/// instance transform.
+/// transform (TransformedPrimitive) in a BVH top level (accel/bvh/primitive_bvh.h: binned SAH
+/// over the instances' world bounds, robust traversal). Hits carry the instance index. Throws
+/// InputError for a singular instance transform.
 std::unique_ptr<Aggregate> make_instanced_aggregate(
     const Scene& scene, const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make);
 
