@@ -1,5 +1,7 @@
 #include "accel/bvh/bvh.h"
 
+#include <string>
+
 #include "accel/common/structure_hash.h"
 
 namespace raylab {
@@ -7,9 +9,13 @@ namespace raylab {
 Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
     : scene_(std::move(scene)), config_(config), tree_(build_bvh(*scene_, config_)), bounds_(scene_->bounds()) {
   build_sah_cost_ = bvh_sah_cost(tree_, config_.cost);
+  if (config_.width == 4) wide4_ = collapse_bvh<4>(tree_, *scene_);
+  if (config_.width == 8) wide8_ = collapse_bvh<8>(tree_, *scene_);
 }
 
 AccelStats Bvh::stats() const {
+  if (config_.width == 4) return {wide4_.bytes(), wide4_.nodes.size(), build_sah_cost_};
+  if (config_.width == 8) return {wide8_.bytes(), wide8_.nodes.size(), build_sah_cost_};
   return {tree_.nodes.size() * sizeof(Bvh2Node) + tree_.prims.size() * sizeof(std::uint32_t), tree_.nodes.size(),
           build_sah_cost_};
 }
@@ -21,6 +27,7 @@ std::optional<std::uint64_t> Bvh::structure_hash() const {
 namespace {
 
 const std::vector<std::string> kBuilders = {"midpoint", "median", "sweep", "binned", "spatial"};
+const std::vector<std::string> kWidths = {"2", "4", "8"};
 
 std::vector<ParamDoc> bvh_params() {
   return {{"builder", "binned",
@@ -31,6 +38,7 @@ std::vector<ParamDoc> bvh_params() {
           {"c_isect", "1", "SAH intersection cost"},
           {"alpha", "1e-5", "SBVH: try spatial splits where child overlap exceeds alpha * SA(root)"},
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
+          {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
           {"robust", "on", "on: Ize's conservative box test + watertight kernel | off: the fast variant"},
           {"threads", "0", "build threads; 0 = all"}};
 }
@@ -51,6 +59,7 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.cost.c_isect = r.get_double("c_isect", 1.0, 1e-6, 1e6);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
+  c.width = static_cast<int>(std::stoi(r.get_choice("width", "8", kWidths)));
   c.robust = r.get_bool("robust", true);
   c.threads = static_cast<int>(r.get_int("threads", 0, 0, 1024));
   return c;
@@ -83,7 +92,9 @@ AccelKind make_bvh_kind() {
                     "vertices (bound: 50% of edge/vertex-aimed rays on closed meshes, 90% on open ones, 0.1% of "
                     "others)"};
           },
-          {"builder=midpoint", "builder=median,leaf_size=1", "robust=off"}};
+          {"width=2", "width=4", "width=8", "robust=off", "width=2,robust=off", "width=4,robust=off",
+           "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
+           "builder=sweep"}};
 }
 
 namespace {

@@ -1,11 +1,15 @@
 #pragma once
 /// `bvh`: the lecture's bounding volume hierarchy over a scene's triangles and spheres
-/// (bvh_build.h for the builders, bvh_traversal.h for traversal). The robust default pairs Ize's
-/// conservative box test with the watertight kernel; `robust=off` is the fast variant.
+/// (bvh_build.h for the builders; bvh_traversal.h traverses the binary tree, width=2;
+/// wide_bvh_traversal.h the 4- or 8-wide tree collapsed from it, with packed leaves). The robust
+/// default pairs Ize's conservative box test with the watertight kernel; `robust=off` is the
+/// fast variant.
 #include <memory>
 
 #include "accel/bvh/bvh_build.h"
 #include "accel/bvh/bvh_traversal.h"
+#include "accel/bvh/packed_triangles_simd.h"
+#include "accel/bvh/wide_bvh_traversal.h"
 #include "accel/common/accel_factory.h"
 #include "scene/scene_primitives.h"
 
@@ -44,6 +48,8 @@ class Bvh final : public AggregateBase<Bvh> {
   template <class Kernel, bool kRobust, bool kAnyHit, class Counters>
   bool trace(const Ray& ray, Hit& hit, Counters& counters) const {
     if (tree_.nodes.empty()) return false;
+    if (config_.width == 8) return trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
+    if (config_.width == 4) return trace_wide<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
     typename Kernel::Context ctx = Kernel::prepare(ray);
     const Scene& scene = *scene_;
     const std::uint32_t* prims = tree_.prims.data();
@@ -62,9 +68,49 @@ class Bvh final : public AggregateBase<Bvh> {
         });
   }
 
+  template <class Kernel, bool kRobust, bool kAnyHit, int N, class Counters>
+  bool trace_wide(const WideBvh<N>& wide, const Ray& ray, Hit& hit, Counters& counters) const {
+    typename Kernel::Context ctx = Kernel::prepare(ray);
+    const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
+    const Scene& scene = *scene_;
+    const TrianglePacket* packets = wide.packets.data();
+    float closest = ray.tmax;
+    return traverse_wide_bvh<N, kRobust, kAnyHit>(
+        wide.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
+          bool found = false;
+          for (const TrianglePacket* p = packets + first; p != packets + first + count; ++p) {
+            if (scene.is_sphere(p->prim[0])) {
+              for (int i = 0; i < kPacketWidth && p->prim[i] != kInvalidId; ++i)
+                if (intersect_scene_primitive<Kernel>(scene, p->prim[i], ctx, hit, counters)) {
+                  found = true;
+                  if constexpr (kAnyHit) return true;
+                }
+              continue;
+            }
+            if constexpr (Counters::enabled)
+              for (int i = p->size(); i > 0; --i) counters.prim_test();
+            TriangleHit th;
+            const int lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, *p, th);
+            if (lane >= 0) {
+              hit.t = th.t;
+              hit.u = th.u;
+              hit.v = th.v;
+              hit.prim = p->prim[lane];
+              hit.instance = kInvalidId;
+              found = true;
+              if constexpr (kAnyHit) return true;
+            }
+          }
+          t = Kernel::closest(ctx);
+          return found;
+        });
+  }
+
   std::shared_ptr<const Scene> scene_;
   BvhConfig config_;
   Bvh2 tree_;
+  WideBvh<4> wide4_;  ///< filled when config_.width == 4
+  WideBvh<8> wide8_;  ///< filled when config_.width == 8
   Bounds3f bounds_;
   double build_sah_cost_ = 0.0;
 };

@@ -1,0 +1,157 @@
+#pragma once
+/// SIMD versions of the ray-triangle kernels over a TrianglePacket (packed_triangles.h).
+///
+///   PacketKernel<Kernel>::Ray pr(ctx);                       // once per ray
+///   int lane = PacketKernel<Kernel>::intersect<kAnyHit>(ctx, pr, packet, hit);
+///
+/// Contract: `intersect` returns the lane that the scalar Kernel, offered the packet's
+/// triangles in lane order, would have reported last (the closest hit strictly before
+/// ctx's current closest, the lowest lane among equal t), or -1; it updates ctx as the scalar
+/// kernel would and writes that lane's hit. With kAnyHit it may return any hitting lane.
+///
+///  - Watertight (Woop, Benthin and Wald, JCGT 2013): every lane evaluates the same IEEE
+///    operations in the same order as WatertightKernel::intersect (the build disables FMA
+///    contraction), and lanes with an edge function equal to zero redo the paper's
+///    double-precision fallback in scalar, so decisions, t, u and v are bit-identical.
+///  - Möller-Trumbore (JGT 1997), the fast variant: fused multiply-adds, no bit-identity claim.
+#include <bit>
+#include <cmath>
+
+#include "accel/bvh/packed_triangles.h"
+#include "accel/bvh/simd.h"
+#include "geometry/triangle_kernels.h"
+
+namespace raylab {
+
+template <class Kernel>
+struct PacketKernel;
+
+template <>
+struct PacketKernel<WatertightKernel> {
+  using F = simd::Float<kPacketWidth>;
+  struct Ray {
+    F ox, oy, oz, sx, sy, sz;
+    explicit Ray(const WatertightKernel::Context& c)
+        : ox(F::broadcast(c.org[c.kx])),
+          oy(F::broadcast(c.org[c.ky])),
+          oz(F::broadcast(c.org[c.kz])),
+          sx(F::broadcast(c.sx)),
+          sy(F::broadcast(c.sy)),
+          sz(F::broadcast(c.sz)) {}
+  };
+
+  template <bool kAnyHit>
+  static int intersect(WatertightKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
+    // a, b, d of the scalar kernel: the vertices relative to the origin, in sheared axes.
+    const F az0 = F::load(p.v[0][c.kz]) - r.oz, bz0 = F::load(p.v[1][c.kz]) - r.oz, cz0 = F::load(p.v[2][c.kz]) - r.oz;
+    const F ax = (F::load(p.v[0][c.kx]) - r.ox) - r.sx * az0, ay = (F::load(p.v[0][c.ky]) - r.oy) - r.sy * az0;
+    const F bx = (F::load(p.v[1][c.kx]) - r.ox) - r.sx * bz0, by = (F::load(p.v[1][c.ky]) - r.oy) - r.sy * bz0;
+    const F cx = (F::load(p.v[2][c.kx]) - r.ox) - r.sx * cz0, cy = (F::load(p.v[2][c.ky]) - r.oy) - r.sy * cz0;
+    F U = cx * by - cy * bx;
+    F V = ax * cy - ay * cx;
+    F W = bx * ay - by * ax;
+    const F zero = F::broadcast(0.0f);
+    if (const unsigned fallback = (U == zero) | (V == zero) | (W == zero)) {
+      alignas(16) float u[kPacketWidth], v[kPacketWidth], w[kPacketWidth];
+      alignas(16) float lax[kPacketWidth], lay[kPacketWidth], lbx[kPacketWidth], lby[kPacketWidth],
+          lcx[kPacketWidth], lcy[kPacketWidth];
+      U.store(u), V.store(v), W.store(w);
+      ax.store(lax), ay.store(lay), bx.store(lbx), by.store(lby), cx.store(lcx), cy.store(lcy);
+      for (unsigned m = fallback; m != 0; m &= m - 1) {
+        const int i = std::countr_zero(m);
+        u[i] = static_cast<float>(double(lcx[i]) * double(lby[i]) - double(lcy[i]) * double(lbx[i]));
+        v[i] = static_cast<float>(double(lax[i]) * double(lcy[i]) - double(lay[i]) * double(lcx[i]));
+        w[i] = static_cast<float>(double(lbx[i]) * double(lay[i]) - double(lby[i]) * double(lax[i]));
+      }
+      U = F::load(u), V = F::load(v), W = F::load(w);
+    }
+    const unsigned mixed = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
+    const F det = U + V + W;
+    unsigned ok = ~mixed & ~(det == zero) & finite(det) & ((1u << kPacketWidth) - 1);
+    if (ok == 0) return -1;
+    const F T = U * (r.sz * az0) + V * (r.sz * bz0) + W * (r.sz * cz0);
+    const F inv_det = F::broadcast(1.0f) / det;
+    const F t = T * inv_det;
+    ok &= (t >= F::broadcast(c.tmin)) & (t < F::broadcast(c.tmax));
+    if (ok == 0) return -1;
+    alignas(16) float ts[kPacketWidth];
+    t.store(ts);
+    int best = std::countr_zero(ok);
+    if constexpr (!kAnyHit) {
+      for (unsigned m = ok & (ok - 1); m != 0; m &= m - 1) {
+        const int i = std::countr_zero(m);
+        if (ts[i] < ts[best]) best = i;
+      }
+    }
+    alignas(16) float us[kPacketWidth], vs[kPacketWidth];
+    (V * inv_det).store(us);
+    (W * inv_det).store(vs);
+    c.tmax = ts[best];
+    hit = {ts[best], us[best], vs[best]};
+    return best;
+  }
+};
+
+template <>
+struct PacketKernel<MollerTrumboreKernel> {
+  using F = simd::Float<kPacketWidth>;
+  struct Ray {
+    F o[3], d[3];
+    explicit Ray(const MollerTrumboreKernel::Context& c) {
+      for (int a = 0; a < 3; ++a) {
+        o[a] = F::broadcast(c.ray.org[a]);
+        d[a] = F::broadcast(c.ray.dir[a]);
+      }
+    }
+  };
+
+  template <bool kAnyHit>
+  static int intersect(MollerTrumboreKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
+    F p0[3], e1[3], e2[3];
+    for (int a = 0; a < 3; ++a) {
+      p0[a] = F::load(p.v[0][a]);
+      e1[a] = F::load(p.v[1][a]) - p0[a];
+      e2[a] = F::load(p.v[2][a]) - p0[a];
+    }
+    const auto cross = [](const F* x, const F* y, F* out) {
+      out[0] = fmsub(x[1], y[2], x[2] * y[1]);
+      out[1] = fmsub(x[2], y[0], x[0] * y[2]);
+      out[2] = fmsub(x[0], y[1], x[1] * y[0]);
+    };
+    const auto dot = [](const F* x, const F* y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+    F pv[3], tv[3], qv[3];
+    cross(r.d, e2, pv);
+    const F det = dot(e1, pv);
+    const F zero = F::broadcast(0.0f), one = F::broadcast(1.0f);
+    unsigned ok = ~(det == zero) & finite(det) & ((1u << kPacketWidth) - 1);
+    if (ok == 0) return -1;
+    const F inv_det = one / det;
+    for (int a = 0; a < 3; ++a) tv[a] = r.o[a] - p0[a];
+    const F u = dot(tv, pv) * inv_det;
+    ok &= (u >= zero) & (u <= one);
+    if (ok == 0) return -1;
+    cross(tv, e1, qv);
+    const F v = dot(r.d, qv) * inv_det;
+    ok &= (v >= zero) & (u + v <= one);
+    if (ok == 0) return -1;
+    const F t = dot(e2, qv) * inv_det;
+    ok &= (t >= F::broadcast(c.ray.tmin)) & (t < F::broadcast(c.tmax));
+    if (ok == 0) return -1;
+    alignas(16) float ts[kPacketWidth], us[kPacketWidth], vs[kPacketWidth];
+    t.store(ts);
+    int best = std::countr_zero(ok);
+    if constexpr (!kAnyHit) {
+      for (unsigned m = ok & (ok - 1); m != 0; m &= m - 1) {
+        const int i = std::countr_zero(m);
+        if (ts[i] < ts[best]) best = i;
+      }
+    }
+    u.store(us);
+    v.store(vs);
+    c.tmax = ts[best];
+    hit = {ts[best], us[best], vs[best]};
+    return best;
+  }
+};
+
+}  // namespace raylab

@@ -1,0 +1,123 @@
+#pragma once
+/// The few SIMD float operations the wide BVH needs, N = 4 (SSE) or 8 (AVX; two SSE halves
+/// where the target has no AVX). Every operation is the IEEE operation of its scalar
+/// counterpart, lane by lane, so code written with them rounds exactly as scalar code does,
+/// with two exceptions: `fmsub` fuses (only the fast variants use it), and min/max keep the
+/// operand order of SSE (`min(a, b) = a < b ? a : b`, `max(a, b) = a > b ? a : b`, so a NaN in
+/// either yields b), which the robust box test relies on to mirror intersect_box's branches.
+#include <immintrin.h>
+
+#include <cstdint>
+
+namespace raylab::simd {
+
+template <int N>
+struct Float;
+
+template <>
+struct Float<4> {
+  __m128 v;
+  static Float load(const float* p) { return {_mm_load_ps(p)}; }
+  static Float broadcast(float x) { return {_mm_set1_ps(x)}; }
+  void store(float* p) const { _mm_store_ps(p, v); }
+  friend Float operator+(Float a, Float b) { return {_mm_add_ps(a.v, b.v)}; }
+  friend Float operator-(Float a, Float b) { return {_mm_sub_ps(a.v, b.v)}; }
+  friend Float operator*(Float a, Float b) { return {_mm_mul_ps(a.v, b.v)}; }
+  friend Float operator/(Float a, Float b) { return {_mm_div_ps(a.v, b.v)}; }
+  friend Float min(Float a, Float b) { return {_mm_min_ps(a.v, b.v)}; }
+  friend Float max(Float a, Float b) { return {_mm_max_ps(a.v, b.v)}; }
+  /// a·b - c, fused where the target has FMA.
+  friend Float fmsub(Float a, Float b, Float c) {
+#if defined(__FMA__)
+    return {_mm_fmsub_ps(a.v, b.v, c.v)};
+#else
+    return {_mm_sub_ps(_mm_mul_ps(a.v, b.v), c.v)};
+#endif
+  }
+  /// Lane masks as bits (bit i = lane i).
+  friend unsigned operator<=(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(a.v, b.v))); }
+  friend unsigned operator<(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmplt_ps(a.v, b.v))); }
+  friend unsigned operator>(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmpgt_ps(a.v, b.v))); }
+  friend unsigned operator>=(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmpge_ps(a.v, b.v))); }
+  friend unsigned operator==(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(a.v, b.v))); }
+  /// Lanes whose value is finite (NaN and ±inf are not).
+  friend unsigned finite(Float a) {
+    const __m128 abs = _mm_andnot_ps(_mm_set1_ps(-0.0f), a.v);
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_cmplt_ps(abs, _mm_set1_ps(__builtin_huge_valf()))));
+  }
+};
+
+#if defined(__AVX__)
+template <>
+struct Float<8> {
+  __m256 v;
+  static Float load(const float* p) { return {_mm256_load_ps(p)}; }
+  static Float broadcast(float x) { return {_mm256_set1_ps(x)}; }
+  void store(float* p) const { _mm256_store_ps(p, v); }
+  friend Float operator+(Float a, Float b) { return {_mm256_add_ps(a.v, b.v)}; }
+  friend Float operator-(Float a, Float b) { return {_mm256_sub_ps(a.v, b.v)}; }
+  friend Float operator*(Float a, Float b) { return {_mm256_mul_ps(a.v, b.v)}; }
+  friend Float operator/(Float a, Float b) { return {_mm256_div_ps(a.v, b.v)}; }
+  friend Float min(Float a, Float b) { return {_mm256_min_ps(a.v, b.v)}; }
+  friend Float max(Float a, Float b) { return {_mm256_max_ps(a.v, b.v)}; }
+  friend Float fmsub(Float a, Float b, Float c) {
+#if defined(__FMA__)
+    return {_mm256_fmsub_ps(a.v, b.v, c.v)};
+#else
+    return {_mm256_sub_ps(_mm256_mul_ps(a.v, b.v), c.v)};
+#endif
+  }
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+  friend unsigned operator<=(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
+  friend unsigned operator<(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+  friend unsigned operator>(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+  friend unsigned operator>=(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
+  friend unsigned operator==(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
+#else
+  friend unsigned operator<=(Float a, Float b) {
+    return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ)));
+  }
+  friend unsigned operator<(Float a, Float b) {
+    return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)));
+  }
+  friend unsigned operator>(Float a, Float b) {
+    return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ)));
+  }
+  friend unsigned operator>=(Float a, Float b) {
+    return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ)));
+  }
+  friend unsigned operator==(Float a, Float b) {
+    return static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ)));
+  }
+#endif
+  friend unsigned finite(Float a) {
+    const __m256 abs = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v);
+    return static_cast<unsigned>(
+        _mm256_movemask_ps(_mm256_cmp_ps(abs, _mm256_set1_ps(__builtin_huge_valf()), _CMP_LT_OQ)));
+  }
+};
+#else
+/// Without AVX: two SSE halves.
+template <>
+struct Float<8> {
+  Float<4> lo, hi;
+  static Float load(const float* p) { return {Float<4>::load(p), Float<4>::load(p + 4)}; }
+  static Float broadcast(float x) { return {Float<4>::broadcast(x), Float<4>::broadcast(x)}; }
+  void store(float* p) const { lo.store(p); hi.store(p + 4); }
+  friend Float operator+(Float a, Float b) { return {a.lo + b.lo, a.hi + b.hi}; }
+  friend Float operator-(Float a, Float b) { return {a.lo - b.lo, a.hi - b.hi}; }
+  friend Float operator*(Float a, Float b) { return {a.lo * b.lo, a.hi * b.hi}; }
+  friend Float operator/(Float a, Float b) { return {a.lo / b.lo, a.hi / b.hi}; }
+  friend Float min(Float a, Float b) { return {min(a.lo, b.lo), min(a.hi, b.hi)}; }
+  friend Float max(Float a, Float b) { return {max(a.lo, b.lo), max(a.hi, b.hi)}; }
+  friend Float fmsub(Float a, Float b, Float c) { return {fmsub(a.lo, b.lo, c.lo), fmsub(a.hi, b.hi, c.hi)}; }
+  friend unsigned operator<=(Float a, Float b) { return (a.lo <= b.lo) | ((a.hi <= b.hi) << 4); }
+  friend unsigned operator<(Float a, Float b) { return (a.lo < b.lo) | ((a.hi < b.hi) << 4); }
+  friend unsigned operator>(Float a, Float b) { return (a.lo > b.lo) | ((a.hi > b.hi) << 4); }
+  friend unsigned operator>=(Float a, Float b) { return (a.lo >= b.lo) | ((a.hi >= b.hi) << 4); }
+  friend unsigned operator==(Float a, Float b) { return (a.lo == b.lo) | ((a.hi == b.hi) << 4); }
+  friend unsigned finite(Float a) { return finite(a.lo) | (finite(a.hi) << 4); }
+};
+#endif
+
+}  // namespace raylab::simd

@@ -1,0 +1,334 @@
+// The wide BVH (lib/accel/bvh/wide_bvh*.h, simd_box_test.h, packed_triangles*.h): the collapse
+// keeps every reference and nests boxes; the SIMD box test is intersect_box lane by lane; the
+// packed watertight kernel is the scalar WatertightKernel bit for bit; any-hit agrees with
+// closest hit, and the wide trees find the binary tree's closest t.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <random>
+
+#include "accel/bvh/bvh.h"
+#include "accel/bvh/packed_triangles_simd.h"
+#include "accel/bvh/simd_box_test.h"
+#include "accel/bvh/wide_bvh.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+std::uint32_t bits(float x) { return std::bit_cast<std::uint32_t>(x); }
+
+bool box_contains(const Bounds3f& outer, const Bounds3f& inner) {
+  return outer.lo.x <= inner.lo.x && outer.lo.y <= inner.lo.y && outer.lo.z <= inner.lo.z &&
+         inner.hi.x <= outer.hi.x && inner.hi.y <= outer.hi.y && inner.hi.z <= outer.hi.z;
+}
+
+template <int N>
+void check_collapse(const Scene& scene, const Bvh2& tree) {
+  const WideBvh<N> wide = collapse_bvh<N>(tree, scene);
+  ASSERT_FALSE(wide.nodes.empty());
+  std::vector<std::uint32_t> seen;
+  std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0u, tree.nodes[0].box}};
+  std::size_t visited = 0;
+  while (!todo.empty()) {
+    const auto [index, parent_box] = todo.back();
+    todo.pop_back();
+    ++visited;
+    ASSERT_LT(index, wide.nodes.size());
+    const WideBvhNode<N>& node = wide.nodes[index];
+    ASSERT_GE(node.used, 1u);
+    ASSERT_LE(node.used, static_cast<std::uint32_t>(N));
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(&node) % 64, 0u);
+    for (int i = 0; i < N; ++i) {
+      const Bounds3f box = node.box(i);
+      if (i >= static_cast<int>(node.used)) {
+        EXPECT_TRUE(box.empty());
+        continue;
+      }
+      EXPECT_TRUE(box_contains(parent_box, box));
+      const std::uint32_t ref = node.child[i];
+      if (!WideRef::is_leaf(ref)) {
+        todo.push_back({ref, box});
+        continue;
+      }
+      for (std::uint32_t p = WideRef::first(ref); p < WideRef::first(ref) + WideRef::count(ref); ++p) {
+        const TrianglePacket& packet = wide.packets[p];
+        const int n = packet.size();
+        ASSERT_GE(n, 1);
+        for (int lane = 0; lane < n; ++lane) {
+          const std::uint32_t prim = packet.prim[lane];
+          seen.push_back(prim);
+          EXPECT_EQ(scene.is_sphere(prim), scene.is_sphere(packet.prim[0]));
+          EXPECT_TRUE(box_contains(box, scene.primitive_bounds(prim)));
+          if (!scene.is_sphere(prim)) {
+            for (int k = 0; k < 3; ++k)
+              EXPECT_EQ(packet.vertex(lane, k), scene.mesh.vertices[scene.mesh.triangles[prim][k]]);
+          }
+        }
+      }
+    }
+  }
+  EXPECT_EQ(visited, wide.nodes.size());
+  std::vector<std::uint32_t> expected = tree.prims;
+  std::sort(expected.begin(), expected.end());
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, expected);
+}
+
+TEST(WideBvh, CollapsePreservesReferencesAndNestsBoxes) {
+  for (const char* spec : {"soup:n=3000", "sphereflake:depth=2", "walls:n=12,angle=30", "sphere:n=8"}) {
+    const auto scene = make_scene(spec);
+    for (const int leaf : {1, 4, 9}) {
+      BvhConfig config;
+      config.max_leaf_size = leaf;
+      config.threads = 1;
+      const Bvh2 tree = build_bvh(*scene, config);
+      SCOPED_TRACE(std::string(spec) + " leaf_size=" + std::to_string(leaf));
+      check_collapse<4>(*scene, tree);
+      check_collapse<8>(*scene, tree);
+    }
+  }
+}
+
+/// Boxes and rays built to hit the NaN and boundary cases of the slab test: axis-parallel rays
+/// with +0 and -0 components, origins on faces and in box planes, flat boxes.
+struct BoxCase {
+  std::vector<Bounds3f> boxes;
+  Ray ray;
+};
+
+BoxCase random_box_case(std::mt19937& rng, int n) {
+  std::uniform_real_distribution<float> coord(-4.0f, 4.0f);
+  std::uniform_int_distribution<int> pick(0, 9);
+  BoxCase c;
+  for (int i = 0; i < n; ++i) {
+    Vec3f a{coord(rng), coord(rng), coord(rng)}, b{coord(rng), coord(rng), coord(rng)};
+    for (int k = 0; k < 3; ++k)
+      if (pick(rng) == 0) b[k] = a[k];  // flat
+    c.boxes.emplace_back(a, b);
+  }
+  const Bounds3f& target = c.boxes[std::uniform_int_distribution<int>(0, n - 1)(rng)];
+  Vec3f org{coord(rng), coord(rng), coord(rng)}, dir{coord(rng), coord(rng), coord(rng)};
+  for (int k = 0; k < 3; ++k) {
+    switch (pick(rng)) {
+      case 0: case 1: org[k] = target.lo[k]; break;  // in a box plane / on a face
+      case 2: case 3: org[k] = target.hi[k]; break;
+      default: break;
+    }
+    switch (pick(rng)) {
+      case 0: case 1: dir[k] = 0.0f; break;
+      case 2: case 3: dir[k] = -0.0f; break;
+      case 4: dir[k] = target.center()[k] - org[k]; break;  // aimed at the box
+      default: break;
+    }
+  }
+  if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) dir.x = -0.0f, dir.y = 1.0f;
+  c.ray = {org, dir, pick(rng) < 3 ? 0.5f : 0.0f,
+           pick(rng) < 5 ? std::numeric_limits<float>::infinity() : std::uniform_real_distribution<float>(0.0f, 3.0f)(rng)};
+  return c;
+}
+
+template <int N>
+void check_box_test(std::mt19937& rng) {
+  int hits = 0, nan_cases = 0;
+  for (int trial = 0; trial < 40000; ++trial) {
+    const BoxCase c = random_box_case(rng, N);
+    WideBvhNode<N> node;
+    for (int i = 0; i < N; ++i)
+      for (int a = 0; a < 3; ++a) {
+        node.bounds[a][i] = c.boxes[i].lo[a];
+        node.bounds[3 + a][i] = c.boxes[i].hi[a];
+      }
+    const WideBoxRay<N, true> wide(c.ray);
+    alignas(32) float entry[N];
+    const unsigned mask = wide.hit(node.bounds, c.ray.tmax, entry);
+    const Vec3f inv = safe_inverse(c.ray.dir);
+    for (int i = 0; i < N; ++i) {
+      float t0 = 0, t1 = 0;
+      const bool scalar = intersect_box(c.boxes[i], c.ray, inv, c.ray.tmin, c.ray.tmax, t0, t1);
+      for (int a = 0; a < 3; ++a)
+        nan_cases += c.ray.dir[a] == 0.0f && (c.ray.org[a] == c.boxes[i].lo[a] || c.ray.org[a] == c.boxes[i].hi[a]);
+      ASSERT_EQ(scalar, ((mask >> i) & 1u) != 0) << "trial " << trial << " lane " << i;
+      if (scalar) {
+        ++hits;
+        ASSERT_EQ(bits(t0), bits(entry[i])) << "trial " << trial << " lane " << i;
+      }
+    }
+  }
+  EXPECT_GT(hits, 1000);
+  EXPECT_GT(nan_cases, 100);
+}
+
+TEST(WideBvh, SimdBoxTestMatchesIntersectBox) {
+  std::mt19937 rng(7);
+  check_box_test<4>(rng);
+  check_box_test<8>(rng);
+}
+
+/// A packet of up to four triangles, shared edges and vertices among them, and rays aimed at
+/// their vertices, edges and interiors from random origins.
+TEST(WideBvh, PackedWatertightMatchesScalarBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> coord(-2.0f, 2.0f), unit(0.0f, 1.0f);
+  std::uniform_int_distribution<int> pick(0, 7);
+  std::vector<TrianglePacket> packets;
+  int hits = 0;
+  for (int trial = 0; trial < 60000; ++trial) {
+    const int n = 1 + trial % kPacketWidth;
+    Scene scene;
+    auto& m = scene.mesh;
+    const Vec3f shared_a{coord(rng), coord(rng), coord(rng)}, shared_b{coord(rng), coord(rng), coord(rng)};
+    for (int i = 0; i < n; ++i) {
+      const auto base = static_cast<std::uint32_t>(m.vertices.size());
+      const int kind = pick(rng);
+      const Vec3f a = kind < 4 ? shared_a : Vec3f{coord(rng), coord(rng), coord(rng)};
+      const Vec3f b = kind < 2 ? shared_b : Vec3f{coord(rng), coord(rng), coord(rng)};
+      const Vec3f c = kind == 7 ? a : Vec3f{coord(rng), coord(rng), coord(rng)};  // some degenerate
+      m.vertices.insert(m.vertices.end(), {a, b, c});
+      m.triangles.push_back({base, base + 1, base + 2});
+    }
+    std::vector<std::uint32_t> prims(n);
+    for (int i = 0; i < n; ++i) prims[i] = static_cast<std::uint32_t>(i);
+    packets.clear();
+    ASSERT_EQ(pack_leaf(scene, prims, packets), 1u);
+    const TrianglePacket& packet = packets[0];
+
+    const int t_index = std::uniform_int_distribution<int>(0, n - 1)(rng);
+    const auto& tri = m.triangles[t_index];
+    const Vec3f p0 = m.vertices[tri[0]], p1 = m.vertices[tri[1]], p2 = m.vertices[tri[2]];
+    Vec3f target;
+    switch (pick(rng) % 4) {
+      case 0: target = p0; break;                                       // vertex
+      case 1: { const float s = unit(rng); target = p0 + (p1 - p0) * s; break; }  // edge
+      case 2: target = shared_a + (shared_b - shared_a) * unit(rng); break;     // shared edge
+      default: {
+        const float u = unit(rng), v = unit(rng) * (1 - u);
+        target = p0 + (p1 - p0) * u + (p2 - p0) * v;
+      }
+    }
+    const Vec3f org{coord(rng) * 3, coord(rng) * 3, coord(rng) * 3};
+    Vec3f dir = target - org;
+    if (pick(rng) == 0) dir[pick(rng) % 3] = 0.0f;
+    if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) continue;
+    const float tmax = pick(rng) < 2 ? unit(rng) * 1.5f : std::numeric_limits<float>::infinity();
+    const Ray ray{org, dir, 0.0f, tmax};
+
+    WatertightKernel::Context scalar = WatertightKernel::prepare(ray);
+    int scalar_lane = -1;
+    TriangleHit scalar_hit;
+    for (int i = 0; i < n; ++i) {
+      TriangleHit th;
+      if (WatertightKernel::intersect(scalar, i, m.vertices[m.triangles[i][0]], m.vertices[m.triangles[i][1]],
+                                      m.vertices[m.triangles[i][2]], th)) {
+        scalar_lane = i;
+        scalar_hit = th;
+      }
+    }
+    WatertightKernel::Context packed = WatertightKernel::prepare(ray);
+    const PacketKernel<WatertightKernel>::Ray pr(packed);
+    TriangleHit packed_hit;
+    const int lane = PacketKernel<WatertightKernel>::intersect<false>(packed, pr, packet, packed_hit);
+    ASSERT_EQ(lane, scalar_lane) << "trial " << trial;
+    ASSERT_EQ(bits(packed.tmax), bits(scalar.tmax)) << "trial " << trial;
+    if (lane >= 0) {
+      ++hits;
+      EXPECT_EQ(packet.prim[lane], static_cast<std::uint32_t>(scalar_lane));
+      ASSERT_EQ(bits(packed_hit.t), bits(scalar_hit.t));
+      ASSERT_EQ(bits(packed_hit.u), bits(scalar_hit.u));
+      ASSERT_EQ(bits(packed_hit.v), bits(scalar_hit.v));
+      // Any-hit reports a hitting lane exactly when closest hit does.
+      WatertightKernel::Context any = WatertightKernel::prepare(ray);
+      TriangleHit any_hit;
+      EXPECT_GE(PacketKernel<WatertightKernel>::intersect<true>(any, pr, packet, any_hit), 0);
+    }
+  }
+  EXPECT_GT(hits, 10000);
+}
+
+/// Exact zeros of the edge functions (the double-precision fallback): rays through a vertex
+/// shared by a fan, along axis directions, where the sheared coordinates are exactly 0.
+TEST(WideBvh, PackedWatertightFallbackLanes) {
+  Scene scene;
+  auto& m = scene.mesh;
+  const Vec3f centre{0.0f, 0.0f, 0.0f};
+  const Vec3f ring[5] = {{1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}, {1, 0, 0}};
+  for (int i = 0; i < 4; ++i) {
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), {centre, ring[i], ring[i + 1]});
+    m.triangles.push_back({base, base + 1, base + 2});
+  }
+  std::vector<TrianglePacket> packets;
+  const std::vector<std::uint32_t> prims = {0, 1, 2, 3};
+  pack_leaf(scene, prims, packets);
+  int hits = 0;
+  for (const Vec3f target : {Vec3f{0, 0, 0}, Vec3f{0.5f, 0, 0}, Vec3f{0, 0.25f, 0}, Vec3f{-0.5f, 0, 0}, Vec3f{1, 0, 0}}) {
+    for (const float dz : {1.0f, -1.0f}) {
+      const Ray ray{target - Vec3f{0, 0, dz}, Vec3f{0, 0, dz}, 0.0f, std::numeric_limits<float>::infinity()};
+      WatertightKernel::Context scalar = WatertightKernel::prepare(ray), packed = scalar;
+      int scalar_lane = -1;
+      TriangleHit sh, ph;
+      for (int i = 0; i < 4; ++i) {
+        TriangleHit th;
+        if (WatertightKernel::intersect(scalar, i, m.vertices[3 * i], m.vertices[3 * i + 1], m.vertices[3 * i + 2], th))
+          scalar_lane = i, sh = th;
+      }
+      const int lane = PacketKernel<WatertightKernel>::intersect<false>(packed, PacketKernel<WatertightKernel>::Ray(packed),
+                                                                        packets[0], ph);
+      ASSERT_EQ(lane, scalar_lane);
+      if (lane >= 0) {
+        ++hits;
+        EXPECT_EQ(bits(ph.t), bits(sh.t));
+        EXPECT_EQ(bits(ph.u), bits(sh.u));
+        EXPECT_EQ(bits(ph.v), bits(sh.v));
+      }
+    }
+  }
+  EXPECT_EQ(hits, 10);  // the fan is watertight: every ray through it hits
+}
+
+TEST(WideBvh, AnyHitAgreesWithClosestHitAndWidthsAgreeOnT) {
+  for (const char* spec : {"soup:n=2000", "sphereflake:depth=1", "walls:n=12,angle=30"}) {
+    const auto scene = make_scene(spec);
+    const Bounds3f box = scene->bounds();
+    for (const bool robust : {true, false}) {
+      BvhConfig base;
+      base.threads = 1;
+      base.robust = robust;
+      base.width = 2;
+      const Bvh binary(scene, base);
+      for (const int width : {4, 8}) {
+        BvhConfig config = base;
+        config.width = width;
+        const Bvh wide(scene, config);
+        std::mt19937 rng(width + 3 * robust);
+        std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+        int hits = 0;
+        for (int i = 0; i < 4000; ++i) {
+          const Vec3f a = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
+          const Vec3f b = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
+          if (a == b) continue;
+          const float tmax = i % 3 == 0 ? 0.5f : std::numeric_limits<float>::infinity();
+          Ray r1{a, b - a, 0.0f, tmax}, r2 = r1;
+          Hit h1, h2;
+          const bool found = wide.intersect(r1, h1);
+          SCOPED_TRACE(std::string(spec) + " width " + std::to_string(width) + " ray " + std::to_string(i));
+          EXPECT_EQ(found, wide.occluded(Ray{a, b - a, 0.0f, tmax}));
+          const bool found2 = binary.intersect(r2, h2);
+          if (robust) {
+            ASSERT_EQ(found, found2);
+            if (found) {
+              EXPECT_EQ(bits(h1.t), bits(h2.t));
+            }
+          }
+          hits += found;
+        }
+        EXPECT_GT(hits, 100);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace raylab
