@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "accel/bsp/bsp.h"
 #include "accel/bsp/bsp_cell.h"
 #include "accel/common/accel_factory.h"
@@ -83,6 +86,60 @@ TEST(BspTree, RaysInItsPlanesAgreeWithTheOracleAsWellAsBruteForce) {
   }
   const BspTree walls(make_scene("walls:n=6,angle=30"), bsp_config("axis_candidates=0"));
   EXPECT_GT(walls.data().triangle_planes, 0u);
+}
+
+// Cells cut by slanted planes and then by an axis plane next to z = 0: the crossings' rounding
+// is relative to the coordinates interpolated from (here up to 18), not to the near-zero z, and
+// the boxes of both children of a plane that crosses the cell must reach the plane.
+TEST(BspCell, ChildBoxesReachTheirPlaneNearZero) {
+  const ConvexCell root(Bounds3f({0.0f, 14.0f, -2.68f}, {5.0f, 18.0f, 3.2e-14f}));
+  BspPlane axis;
+  axis.axis = 2;
+  axis.pos = -0x1.31a67ap-45f;
+  axis.normal = Vec3d(0, 0, 1);
+  axis.origin = Vec3d(0, 0, axis.pos);
+  for (int i = 0; i < 200; ++i) {
+    BspPlane slanted;
+    slanted.normal = Vec3d(std::cos(0.1 * i), 0.3 + std::sin(0.37 * i), 0.7 + 0.5 * std::sin(1.3 * i));
+    slanted.origin = Vec3d(2.5 + std::sin(0.7 * i), 16.0 + std::cos(0.9 * i), -1.0);
+    slanted.scale = 4.0;
+    ConvexCell a, b;
+    root.split(slanted, a, b);
+    for (const ConvexCell* c : {&a, &b}) {
+      if (c->empty()) continue;
+      ConvexCell below, above;
+      c->split(axis, below, above);
+      if (below.empty() || above.empty()) continue;  // the plane misses the cell
+      EXPECT_GE(below.bounds().hi.z, axis.pos) << i;
+      EXPECT_LE(above.bounds().lo.z, axis.pos) << i;
+    }
+  }
+}
+
+// Rays at shared edges and vertices of a closed CAD mesh whose flat face lies at z = -3.4e-14:
+// its triangles were dropped from the cells next to that face (cell boxes too tight there, and
+// slivers between nearly coplanar supporting planes), so these rays hit a farther triangle.
+TEST(BspTree, ClosedMeshKeepsEveryTriangleAndAgreesOnItsEdges) {
+  const auto scene = make_scene("cgal:fandisk_large");
+  const BspTree bsp(scene, bsp_config(""));
+  const auto exact = make_accelerator("exact", scene);
+  const std::vector<Ray> rays = {
+      {{0x1.d0b9d6p+1f, 0x1.e0b63p+3f, 0x1.1ee76cp-4f}, {-0x1.a293p-6f, 0x1.fa78p-7f, -0x1.1ee76cp-4f}},
+      {{0x1.ab0fa6p+1f, 0x1.d5481cp+3f, 0x1.2372d4p-4f}, {0x1.9a2ep-7f, 0x1.89fcp-6f, -0x1.2372d4p-4f}},
+      {{0x1.ac8ed6p+1f, 0x1.df29eep+3f, 0x1.253d5cp-4f}, {0x1.3c7ep-6f, -0x1.1b78p-6f, -0x1.253d5cp-4f}},
+      {{0x1.90ba5ap+1f, 0x1.db8eep+3f, 0x1.2601cap-4f}, {-0x1.7f4ap-7f, 0x1.7194p-6f, -0x1.2601cap-4f}},
+      {{0x1.d7307cp+1f, 0x1.d41cbep+3f, 0x1.1e2a5ep-4f}, {-0x1.69cdp-6f, 0x1.536cp-6f, -0x1.1e2a5ep-4f}},
+  };
+  const auto ref = trace_rays(*exact, rays, TraceOptions{1, false, false});
+  const auto got = trace_rays(bsp, rays, TraceOptions{1, false, false});
+  const double diag = length(Vec3d(scene->bounds().diagonal()));
+  const HitComparison c = compare_hits(rays, got.hits, ref.hits, diag);
+  EXPECT_EQ(c.mismatches, 0u);
+  for (std::size_t i = 0; i < rays.size(); ++i) EXPECT_FLOAT_EQ(got.hits[i].t, 1.0f) << i;
+
+  std::vector<bool> referenced(scene->primitive_count(), false);
+  for (std::uint32_t p : bsp.data().prims) referenced[p] = true;
+  EXPECT_EQ(std::count(referenced.begin(), referenced.end(), false), 0);
 }
 
 }  // namespace

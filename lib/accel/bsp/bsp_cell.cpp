@@ -10,12 +10,18 @@ namespace raylab {
 
 ConvexCell::ConvexCell(const Bounds3f& box) {
   const Vec3d lo(box.lo), hi(box.hi);
+  magnitude_ = std::max(max_component(max(abs(lo), abs(hi))), 0.0);
+  box_ = Bounds3d(lo, hi);
   auto corner = [&](int i) { return Vec3d(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z); };
   const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   for (const auto& q : quads) faces_.push_back({corner(q[0]), corner(q[1]), corner(q[2]), corner(q[3])});
 }
 
 namespace {
+
+/// Bound on the rounding of one clipping step's arithmetic on a vertex coordinate (a handful of
+/// double ulps), relative to the root box's magnitude, with a wide margin.
+constexpr double kClipRounding = 1e-14;
 
 double polygon_area(const std::vector<Vec3d>& poly) {
   Vec3d sum(0.0);
@@ -78,18 +84,10 @@ double ConvexCell::surface_area() const {
 }
 
 Bounds3f ConvexCell::bounds() const {
-  Vec3d lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-  for (const auto& f : faces_)
-    for (const Vec3d& p : f) {
-      lo = min(lo, p);
-      hi = max(hi, p);
-    }
   Bounds3f b;
   if (faces_.empty()) return b;
   for (int k = 0; k < 3; ++k) {
-    // The vertices carry the rounding of the clipping; widen by a relative 1e-9 before
-    // rounding outward to float.
-    const double l = lo[k] - 1e-9 * (std::abs(lo[k]) + 1e-30), h = hi[k] + 1e-9 * (std::abs(hi[k]) + 1e-30);
+    const double l = box_.lo[k], h = box_.hi[k];
     b.lo[k] = static_cast<float>(l);
     b.hi[k] = static_cast<float>(h);
     if (double(b.lo[k]) > l) b.lo[k] = std::nextafter(b.lo[k], -std::numeric_limits<float>::infinity());
@@ -101,6 +99,53 @@ Bounds3f ConvexCell::bounds() const {
 void ConvexCell::split(const BspPlane& plane, ConvexCell& negative, ConvexCell& positive) const {
   negative.faces_.clear();
   positive.faces_.clear();
+  // The exact cell's vertices on a side are the exact vertices there and the exact crossings of
+  // the plane with the exact edges. A computed vertex v is within error_ of its exact one, so the
+  // exact plane's value there is within err(v) = |n|_1·error_ + kBspRelError·scale·|v - o|_1 of
+  // the computed d(v): v counts for each side it may lie on, and on an edge [u, w] that may
+  // cross, the crossing's parameter from u lies in [f_lo, f_hi] from the bounds on d(u), d(w).
+  const double n1 = std::abs(plane.normal.x) + std::abs(plane.normal.y) + std::abs(plane.normal.z);
+  auto distance_error = [&](const Vec3d& v) {
+    const Vec3d q = abs(v - plane.origin);
+    return n1 * error_ + kBspRelError * plane.scale * (q.x + q.y + q.z);
+  };
+  Bounds3d neg_box, pos_box;
+  double child_error = error_;
+  for (const auto& f : faces_)
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const Vec3d& u = f[i];
+      const Vec3d& w = f[(i + 1) % f.size()];
+      const double du = plane.signed_distance(u), dw = plane.signed_distance(w);
+      const double eu = distance_error(u), ew = distance_error(w);
+      if (du <= eu) neg_box.extend(u);
+      if (du >= -eu) pos_box.extend(u);
+      const bool u_neg = du < -eu, u_pos = du > eu, w_neg = dw < -ew, w_pos = dw > ew;
+      if ((u_neg && w_neg) || (u_pos && w_pos)) continue;
+      // At the crossing f = |d(u)| / (|d(u)| + |d(w)|) of the exact values, each within eu, ew of
+      // the computed ones; a vertex that may lie in the plane leaves its end of [0, 1] open.
+      const double au = std::abs(du), aw = std::abs(dw);
+      double f_lo = u_neg || u_pos ? (au - eu) / (au - eu + aw + ew) : 0.0;
+      double f_hi = w_neg || w_pos ? (au + eu) / (au + eu + aw - ew) : 1.0;
+      f_lo = std::clamp(f_lo, 0.0, 1.0);
+      f_hi = std::clamp(f_hi, f_lo, 1.0);
+      const Vec3d a = u + (w - u) * f_lo, b = u + (w - u) * f_hi;
+      neg_box.extend(a);
+      neg_box.extend(b);
+      pos_box.extend(a);
+      pos_box.extend(b);
+      child_error = std::max(child_error, error_ + max_component(abs(w - u)) * (f_hi - f_lo));
+    }
+  child_error += kClipRounding * magnitude_;
+  auto finish = [&](ConvexCell& c, Bounds3d box) {
+    c.magnitude_ = magnitude_;
+    c.error_ = child_error;
+    box.lo = box.lo - Vec3d(child_error);
+    box.hi = box.hi + Vec3d(child_error);
+    c.box_ = intersect(box, box_);
+  };
+  finish(negative, neg_box);
+  finish(positive, pos_box);
+
   std::vector<Vec3d> cap;
   for (const auto& f : faces_) {
     auto n = clip_polygon(f, plane, -1.0, nullptr);

@@ -14,14 +14,22 @@ class ConvexCell {
   explicit ConvexCell(const Bounds3f& box);
 
   double surface_area() const;
-  /// A float box containing the cell (its vertices rounded outward).
+  /// A float box containing the exact cell (the intersection of the root box with the closed
+  /// half-spaces of the exact planes split by), rounded outward from box().
   Bounds3f bounds() const;
   bool empty() const { return faces_.empty(); }
   /// The two parts of this cell on the negative and positive sides of `plane`.
   void split(const BspPlane& plane, ConvexCell& negative, ConvexCell& positive) const;
 
  private:
+  /// The faces as computed in double: each vertex within error_ (per coordinate) of the exact
+  /// cell's corresponding vertex.
   std::vector<std::vector<Vec3d>> faces_;
+  /// A box containing the exact cell: the parent's box cut to the points that may lie on this
+  /// side, widened by error_ (first-order forward error analysis of the clipping).
+  Bounds3d box_;
+  double error_ = 0.0;
+  double magnitude_ = 0.0;  ///< the largest |coordinate| of the root box, which scales rounding
 };
 
 }  // namespace raylab

@@ -9,6 +9,11 @@
 
 namespace raylab {
 
+/// Relative bound on the rounding of a double dot product of float data and of the plane's own
+/// construction (about 10 ulps of double), with a wide margin: n·(p - origin) is within
+/// kBspRelError·scale·|p - origin|_1 of the exact plane's value.
+inline constexpr double kBspRelError = 1e-13;
+
 struct BspPlane {
   Vec3d normal;            ///< unnormalised: (p1-p0)×(p2-p0) in double, or a unit axis
   Vec3d origin;            ///< a point of the plane: the triangle's p0, or pos·e_axis

@@ -10,6 +10,7 @@
 #include <cstdint>
 
 #include "accel/bsp/bsp_node.h"
+#include "accel/bsp/bsp_plane.h"
 #include "accel/kdtree/kdtree_traversal.h"
 
 namespace raylab {
@@ -20,10 +21,6 @@ struct BspTreeView {
   const Scene* scene;
   Bounds3f bounds;
 };
-
-/// Relative bound on the rounding of a double dot product of float data and of the plane's own
-/// construction (about 10 ulps of double), with a wide margin.
-inline constexpr double kBspRelError = 1e-13;
 
 template <class Kernel, bool kAnyHit, class Counters>
 bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
