@@ -4,6 +4,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "accel/bvh/bvh_builders.h"
 #include "accel/kdtree/sah_cost.h"
 
 namespace raylab {
@@ -180,10 +181,18 @@ class Builder {
 Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
   if (boxes.size() >= std::numeric_limits<std::uint32_t>::max())
     throw std::length_error("build_bvh_over_boxes: more than 2^32 - 1 boxes");
-  return Builder(boxes, config).build();
+  switch (config.builder) {
+    case BvhBuilder::midpoint:
+    case BvhBuilder::median: return Builder(boxes, config).build();
+    case BvhBuilder::sweep: return build_bvh_sweep_sah(boxes, config);
+    case BvhBuilder::binned:
+    case BvhBuilder::spatial: break;
+  }
+  return build_bvh_binned_sah(boxes, config);
 }
 
 Bvh2 build_bvh(const Scene& scene, const BvhConfig& config) {
+  if (config.builder == BvhBuilder::spatial) return build_bvh_spatial(scene, config);
   std::vector<Bounds3f> boxes(scene.primitive_count());
   for (std::size_t i = 0; i < boxes.size(); ++i) boxes[i] = scene.primitive_bounds(static_cast<unsigned>(i));
   return build_bvh_over_boxes(boxes, config);

@@ -1,0 +1,135 @@
+/// Binned SAH builder (Wald, "On fast construction of SAH-based bounding volume hierarchies",
+/// 2007), parallel with TBB: large nodes bin in parallel chunks, and both children of a node of
+/// at least kTaskMin references are built as separate tasks into their own subtrees
+/// (bvh_subtree.h). Which nodes become tasks depends only on reference counts, and bins merge
+/// exactly (min/max, integer sums), so the tree is the same with any thread count.
+///
+/// Work: O(N) per tree level (one binning pass and one partition pass), O(N log N) in all for
+/// trees of logarithmic depth; no heap allocation per node below kParallelBinMin references.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
+#include <memory>
+#include <thread>
+
+#include "accel/bvh/bvh_builders.h"
+#include "accel/bvh/bvh_object_binning.h"
+#include "accel/bvh/bvh_subtree.h"
+
+namespace raylab {
+namespace {
+
+constexpr std::size_t kTaskMin = 4096;           ///< children of nodes this large are tasks
+constexpr std::size_t kParallelBinMin = 1 << 16;  ///< nodes this large bin in parallel
+constexpr std::size_t kBinChunk = 1 << 15;
+
+class BinnedSahBuilder {
+ public:
+  BinnedSahBuilder(BvhBuildRef* refs, const BvhConfig& config) : refs_(refs), config_(config) {}
+
+  void build(BvhSubtree& out, std::uint32_t slot, std::size_t begin, std::size_t n, const BvhRangeBounds& bounds,
+             int depth) const {
+    const Bounds3f box = bounds.box();
+    out.nodes[slot].box = box;
+    const bool small = n <= static_cast<std::size_t>(config_.max_leaf_size);
+    if (n == 1) return make_leaf(out, slot, begin, n);
+    BvhRangeBounds left, right;
+    std::size_t mid = 0;
+    const int centroid_axis = bounds.centroid_axis();
+    if (depth >= kBvhMaxDepth - 32 || centroid_axis < 0) {
+      if (small) return make_leaf(out, slot, begin, n);
+      mid = bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
+    } else {
+      const BvhBinMapping map(bounds, config_.bins);
+      const BvhObjectSplit s = find_split(begin, n, map);
+      const double half_area = bvh_half_area(box);
+      const double split_cost = s.axis >= 0 && half_area > 0.0 ? bvh_split_cost(config_.cost, s.cost, half_area)
+                                                                 : std::numeric_limits<double>::infinity();
+      if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n)))
+        return make_leaf(out, slot, begin, n);
+      mid = s.axis >= 0 ? bvh_partition_object(refs_ + begin, n, map, s.axis, s.bin, left, right)
+                        : bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
+      if (mid == 0 || mid == n) mid = bvh_partition_median(refs_ + begin, n, -1, left, right);
+    }
+    const auto child = static_cast<std::uint32_t>(out.nodes.size());
+    out.nodes.resize(out.nodes.size() + 2);
+    out.nodes[slot].first = child;
+    out.nodes[slot].count = 0;
+    if (n >= kTaskMin) {
+      auto l = std::make_unique<BvhSubtree>(), r = std::make_unique<BvhSubtree>();
+      BvhSubtree &lt = *l, &rt = *r;
+      out.grafts.emplace_back(child, std::move(l));
+      out.grafts.emplace_back(child + 1, std::move(r));
+      tbb::parallel_invoke([&] { build(lt, 0, begin, mid, left, depth + 1); },
+                           [&] { build(rt, 0, begin + mid, n - mid, right, depth + 1); });
+    } else {
+      build(out, child, begin, mid, left, depth + 1);
+      build(out, child + 1, begin + mid, n - mid, right, depth + 1);
+    }
+  }
+
+ private:
+  static void make_leaf(BvhSubtree& out, std::uint32_t slot, std::size_t begin, std::size_t n) {
+    out.nodes[slot].first = static_cast<std::uint32_t>(begin);
+    out.nodes[slot].count = static_cast<std::uint32_t>(n);
+  }
+
+  BvhObjectSplit find_split(std::size_t begin, std::size_t n, const BvhBinMapping& map) const {
+    if (n < kParallelBinMin) {
+      BvhObjectBins bins;
+      bins.reset(config_.bins);
+      bins.add(refs_ + begin, n, map);
+      return bvh_best_object_split(bins);
+    }
+    const std::size_t chunks = (n + kBinChunk - 1) / kBinChunk;
+    auto bins = std::make_unique<BvhObjectBins[]>(chunks);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t c = r.begin(); c != r.end(); ++c) {
+        const std::size_t lo = c * kBinChunk, hi = std::min(n, lo + kBinChunk);
+        bins[c].reset(config_.bins);
+        bins[c].add(refs_ + begin + lo, hi - lo, map);
+      }
+    });
+    for (std::size_t c = 1; c < chunks; ++c) bins[0].merge(bins[c]);
+    return bvh_best_object_split(bins[0]);
+  }
+
+  BvhBuildRef* refs_;
+  const BvhConfig& config_;
+};
+
+}  // namespace
+
+int bvh_build_threads(int threads) {
+  return threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
+  const std::size_t n = boxes.size();
+  if (n == 0) return Bvh2{};
+  std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[n]);
+  BvhSubtree root;
+  tbb::task_arena arena(bvh_build_threads(config.threads));
+  arena.execute([&] {
+    const BvhRangeBounds bounds = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, kBinChunk), BvhRangeBounds(),
+        [&](const tbb::blocked_range<std::size_t>& r, BvhRangeBounds b) {
+          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            refs[i] = BvhBuildRef::make(bvh_build_box(boxes[i]), static_cast<std::uint32_t>(i));
+            b.extend(refs[i]);
+          }
+          return b;
+        },
+        [](BvhRangeBounds a, const BvhRangeBounds& b) {
+          a.extend(b);
+          return a;
+        });
+    BinnedSahBuilder(refs.get(), config).build(root, 0, 0, n, bounds, 0);
+  });
+  return bvh_concatenate(root, n, [&](std::size_t k) { return refs[k].id; });
+}
+
+}  // namespace raylab

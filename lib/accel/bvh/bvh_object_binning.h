@@ -1,0 +1,240 @@
+#pragma once
+/// Binned SAH object splits (Wald, "On fast construction of SAH-based bounding volume
+/// hierarchies", 2007), shared by the binned builder and the object-split half of the SBVH.
+///
+/// References are binned by their centroids (twice the centre: lo + hi) into `bins` equal bins
+/// per axis over the node's centroid bounds; all three axes are binned in one pass with SSE.
+/// The split cost is the lecture's N_A·S_A + N_B·S_B in half surface areas; callers compare it
+/// with a leaf through bvh_split_cost. Bins merge by min/max and integer sums, so parallel
+/// binning gives the same bins, and the same tree, with any number of threads.
+#include <immintrin.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+#include "accel/bvh/bvh_build_ref.h"
+#include "accel/bvh/bvh_config.h"
+
+namespace raylab {
+
+inline constexpr int kBvhMaxBins = 256;
+
+/// Half the surface area of the box in lanes 0..2 of lo, hi; 0 for an empty box.
+inline float bvh_half_area(__m128 lo, __m128 hi) {
+  alignas(16) float d[4];
+  _mm_store_ps(d, _mm_max_ps(_mm_sub_ps(hi, lo), _mm_setzero_ps()));
+  return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+}
+inline float bvh_half_area(const Bounds3f& b) {
+  if (b.empty()) return 0.0f;
+  const Vec3f d = b.diagonal();
+  return d.x * d.y + d.y * d.z + d.z * d.x;
+}
+
+/// Box and centroid bounds of a reference range, in SSE registers (lane 3 is garbage).
+struct BvhRangeBounds {
+  __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  __m128 hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  __m128 clo = _mm_set1_ps(std::numeric_limits<float>::infinity());  ///< centroid2 bounds
+  __m128 chi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+
+  void extend(const BvhBuildRef& r) {
+    const __m128 l = _mm_load_ps(r.lo), h = _mm_load_ps(r.hi), c = _mm_add_ps(l, h);
+    lo = _mm_min_ps(lo, l);
+    hi = _mm_max_ps(hi, h);
+    clo = _mm_min_ps(clo, c);
+    chi = _mm_max_ps(chi, c);
+  }
+  void extend(const BvhRangeBounds& o) {
+    lo = _mm_min_ps(lo, o.lo);
+    hi = _mm_max_ps(hi, o.hi);
+    clo = _mm_min_ps(clo, o.clo);
+    chi = _mm_max_ps(chi, o.chi);
+  }
+  Bounds3f box() const {
+    alignas(16) float l[4], h[4];
+    _mm_store_ps(l, lo);
+    _mm_store_ps(h, hi);
+    return {Vec3f(l[0], l[1], l[2]), Vec3f(h[0], h[1], h[2])};
+  }
+  /// The largest axis of the centroid bounds; -1 when all centroids coincide.
+  int centroid_axis() const {
+    alignas(16) float l[4], h[4];
+    _mm_store_ps(l, clo);
+    _mm_store_ps(h, chi);
+    int axis = -1;
+    float best = 0.0f;
+    for (int a = 0; a < 3; ++a)
+      if (h[a] - l[a] > best) best = h[a] - l[a], axis = a;
+    return axis;
+  }
+};
+
+inline BvhRangeBounds bvh_range_bounds(const BvhBuildRef* refs, std::size_t n) {
+  BvhRangeBounds b;
+  for (std::size_t i = 0; i < n; ++i) b.extend(refs[i]);
+  return b;
+}
+
+/// Maps a reference's centroid to its bin on each axis.
+struct BvhBinMapping {
+  __m128 origin, scale;  ///< bin = (centroid2 - origin) * scale, clamped to [0, bins - 1]
+  int bins;
+
+  BvhBinMapping(const BvhRangeBounds& b, int bins_) : origin(b.clo), bins(bins_) {
+    const __m128 extent = _mm_sub_ps(b.chi, b.clo);
+    // Slightly below bins/extent so that the largest centroid lands in the last bin; a zero
+    // extent gives scale 0 (every reference in bin 0, no split on that axis).
+    const __m128 s = _mm_div_ps(_mm_set1_ps(static_cast<float>(bins) * 0.99999f), extent);
+    scale = _mm_and_ps(s, _mm_cmpgt_ps(extent, _mm_setzero_ps()));
+  }
+  /// Bin indices of `r` on the three axes (lane 3 unused).
+  __m128i bin(const BvhBuildRef& r) const {
+    const __m128 c = _mm_add_ps(_mm_load_ps(r.lo), _mm_load_ps(r.hi));
+    __m128 f = _mm_mul_ps(_mm_sub_ps(c, origin), scale);
+    f = _mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), _mm_set1_ps(static_cast<float>(bins - 1)));
+    return _mm_cvttps_epi32(f);
+  }
+  int bin(const BvhBuildRef& r, int axis) const {
+    alignas(16) int b[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(b), bin(r));
+    return b[axis];
+  }
+};
+
+/// Per-axis bin boxes and counts.
+struct BvhObjectBins {
+  struct Bin {
+    __m128 lo, hi;
+  };
+  Bin box[3][kBvhMaxBins];
+  std::uint32_t count[3][kBvhMaxBins];
+  int bins = 0;
+
+  void reset(int n) {
+    bins = n;
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 ninf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < n; ++b) {
+        box[a][b] = {inf, ninf};
+        count[a][b] = 0;
+      }
+  }
+  void add(const BvhBuildRef* refs, std::size_t n, const BvhBinMapping& map) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const __m128 l = _mm_load_ps(refs[i].lo), h = _mm_load_ps(refs[i].hi);
+      alignas(16) int b[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(b), map.bin(refs[i]));
+      for (int a = 0; a < 3; ++a) {
+        Bin& bin = box[a][b[a]];
+        bin.lo = _mm_min_ps(bin.lo, l);
+        bin.hi = _mm_max_ps(bin.hi, h);
+        ++count[a][b[a]];
+      }
+    }
+  }
+  void merge(const BvhObjectBins& o) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < bins; ++b) {
+        box[a][b].lo = _mm_min_ps(box[a][b].lo, o.box[a][b].lo);
+        box[a][b].hi = _mm_max_ps(box[a][b].hi, o.box[a][b].hi);
+        count[a][b] += o.count[a][b];
+      }
+  }
+};
+
+/// The best object split of a node: references in bins below `bin` on `axis` go left.
+struct BvhObjectSplit {
+  int axis = -1;
+  int bin = 0;
+  float cost = std::numeric_limits<float>::infinity();  ///< N_A·S_A + N_B·S_B, half areas
+  std::uint32_t left_count = 0;
+  Bounds3f left, right;  ///< child boxes
+};
+
+/// Sweeps the bins of every axis; candidates with an empty side are skipped.
+inline BvhObjectSplit bvh_best_object_split(const BvhObjectBins& bins) {
+  BvhObjectSplit best;
+  const int n = bins.bins;
+  float right_area[kBvhMaxBins];
+  for (int a = 0; a < 3; ++a) {
+    __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity()), hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    for (int b = n - 1; b > 0; --b) {
+      lo = _mm_min_ps(lo, bins.box[a][b].lo);
+      hi = _mm_max_ps(hi, bins.box[a][b].hi);
+      right_area[b] = bvh_half_area(lo, hi);
+    }
+    std::uint32_t total = 0;
+    for (int b = 0; b < n; ++b) total += bins.count[a][b];
+    lo = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    std::uint32_t left = 0;
+    for (int b = 0; b + 1 < n; ++b) {
+      lo = _mm_min_ps(lo, bins.box[a][b].lo);
+      hi = _mm_max_ps(hi, bins.box[a][b].hi);
+      left += bins.count[a][b];
+      if (left == 0 || left == total) continue;
+      const float cost = bvh_half_area(lo, hi) * static_cast<float>(left) +
+                         right_area[b + 1] * static_cast<float>(total - left);
+      if (cost < best.cost) {
+        best.cost = cost;
+        best.axis = a;
+        best.bin = b + 1;
+        best.left_count = left;
+      }
+    }
+  }
+  if (best.axis >= 0) {
+    BvhRangeBounds l, r;
+    for (int b = 0; b < n; ++b) {
+      BvhRangeBounds& side = b < best.bin ? l : r;
+      side.lo = _mm_min_ps(side.lo, bins.box[best.axis][b].lo);
+      side.hi = _mm_max_ps(side.hi, bins.box[best.axis][b].hi);
+    }
+    best.left = l.box();
+    best.right = r.box();
+  }
+  return best;
+}
+
+/// The SAH cost (bvh_config.h) of a split of cost N_A·S_A + N_B·S_B (half areas) in a node of
+/// half area `half_area`; the leaf it competes with costs c_isect·N.
+inline double bvh_split_cost(const BvhSahCost& c, double split_cost, double half_area) {
+  return c.c_trav + c.c_isect * split_cost / half_area;
+}
+
+/// Hoare partition of refs[0, n) into [0, m) with bin < split.bin on split.axis and [m, n),
+/// accumulating both sides' bounds. Returns m. Deterministic (no scheduling involved).
+inline std::size_t bvh_partition_object(BvhBuildRef* refs, std::size_t n, const BvhBinMapping& map, int axis, int split_bin,
+                                        BvhRangeBounds& left, BvhRangeBounds& right) {
+  std::size_t i = 0, j = n;
+  auto goes_left = [&](const BvhBuildRef& r) { return map.bin(r, axis) < split_bin; };
+  for (;;) {
+    while (i < j && goes_left(refs[i])) left.extend(refs[i++]);
+    while (i < j && !goes_left(refs[j - 1])) right.extend(refs[--j]);
+    if (i >= j) break;
+    std::swap(refs[i], refs[j - 1]);
+    left.extend(refs[i++]);
+    right.extend(refs[--j]);
+  }
+  return i;
+}
+
+/// The median split of refs[0, n) by centroid on `axis` (ties by primitive id), or the middle
+/// by position when axis < 0; used below kBvhMaxDepth - 32 and where no SAH split exists.
+inline std::size_t bvh_partition_median(BvhBuildRef* refs, std::size_t n, int axis, BvhRangeBounds& left,
+                                        BvhRangeBounds& right) {
+  const std::size_t mid = n / 2;
+  if (axis >= 0)
+    std::nth_element(refs, refs + mid, refs + n, [axis](const BvhBuildRef& x, const BvhBuildRef& y) {
+      const float cx = x.centroid2(axis), cy = y.centroid2(axis);
+      return cx < cy || (cx == cy && x.id < y.id);
+    });
+  left = bvh_range_bounds(refs, mid);
+  right = bvh_range_bounds(refs + mid, n - mid);
+  return mid;
+}
+
+}  // namespace raylab

@@ -1,0 +1,303 @@
+/// SBVH builder (Stich, Friedrich and Dietrich, "Spatial splits in bounding volume
+/// hierarchies", HPG 2009): at each node the binned SAH object split (bvh_object_binning.h)
+/// competes with a binned spatial split, tried only where the object split's children overlap
+/// by more than alpha·SA(root) (§4.3). A spatial split cuts the node at a bin plane; references
+/// straddling it are clipped to both sides or, where the SAH prefers, kept whole on one side
+/// ("reference unsplitting", §4.4). This refines the bounding boxes of long, rotated triangles
+/// (the lecture's rotated walls).
+///
+/// Clipping is conservative: a part's box is clipped_triangle_bounds (geometry/
+/// triangle_clipping.h; floating point rounded outward) of the triangle against the reference's
+/// box restricted to that side, so it contains the triangle's intersection with the side; a part
+/// whose clipped box is empty does not meet the side and is dropped. Spheres are clipped by
+/// their bounds and never split otherwise.
+///
+/// Duplication bound: every node owns a reference capacity, the root (1 + max_duplication)·N.
+/// A split needs n_L + n_R <= capacity, and the spare capacity goes to the children in
+/// proportion to their counts, so every subtree stays within its capacity and the tree holds at
+/// most (1 + max_duplication)·N references. Spatial splits stop in a subtree once its capacity
+/// is used. The split depends only on the node's references, so the tree is the same with any
+/// number of build threads.
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+
+#include "accel/bvh/bvh_builders.h"
+#include "accel/bvh/bvh_object_binning.h"
+#include "accel/bvh/bvh_subtree.h"
+#include "geometry/triangle_clipping.h"
+
+namespace raylab {
+namespace {
+
+constexpr std::size_t kTaskMin = 4096;  ///< children of nodes this large are tasks
+
+struct SpatialSplit {
+  int axis = -1;
+  float plane = 0.0f;
+  float cost = std::numeric_limits<float>::infinity();  ///< N_A·S_A + N_B·S_B, half areas
+  Bounds3f left, right;
+  std::size_t left_count = 0, right_count = 0;
+};
+
+class SpatialBuilder {
+ public:
+  SpatialBuilder(const Scene& scene, const BvhConfig& config, BvhBuildRef* refs, float root_half_area)
+      : scene_(scene), config_(config), refs_(refs), min_overlap_(static_cast<float>(config.spatial_alpha) * root_half_area) {}
+
+  /// The node holds refs_[begin, begin + n) and owns refs_[begin, begin + capacity).
+  void build(BvhSubtree& out, std::uint32_t slot, std::size_t begin, std::size_t n, std::size_t capacity,
+             const BvhRangeBounds& bounds, int depth) const {
+    const Bounds3f box = bounds.box();
+    out.nodes[slot].box = box;
+    if (n == 1) return make_leaf(out, slot, begin, n);
+    const bool small = n <= static_cast<std::size_t>(config_.max_leaf_size);
+    BvhRangeBounds left, right;
+    std::size_t n_left = 0, n_right = 0;
+    const int centroid_axis = bounds.centroid_axis();
+    BvhBuildRef* refs = refs_ + begin;
+    if (depth >= kBvhMaxDepth - 32 || centroid_axis < 0) {
+      if (small) return make_leaf(out, slot, begin, n);
+      n_left = bvh_partition_median(refs, n, centroid_axis, left, right);
+      n_right = n - n_left;
+    } else {
+      const BvhBinMapping map(bounds, config_.bins);
+      BvhObjectSplit object;
+      {
+        BvhObjectBins bins;
+        bins.reset(config_.bins);
+        bins.add(refs, n, map);
+        object = bvh_best_object_split(bins);
+      }
+      SpatialSplit spatial;
+      if (capacity > n && (object.axis < 0 || bvh_half_area(intersect(object.left, object.right)) > min_overlap_))
+        spatial = find_spatial_split(refs, n, box, capacity - n);
+      const double half_area = bvh_half_area(box);
+      const double best = std::min(object.cost, spatial.cost);
+      const double split_cost = half_area > 0.0 && best < std::numeric_limits<float>::infinity()
+                                    ? bvh_split_cost(config_.cost, best, half_area)
+                                    : std::numeric_limits<double>::infinity();
+      if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n))) return make_leaf(out, slot, begin, n);
+      if (spatial.cost < object.cost && apply_spatial_split(refs, n, capacity, spatial, left, right, n_left, n_right)) {
+        // refs_[begin, begin + n_left) and refs_[begin + n_left, + n_right) hold the children.
+      } else {
+        n_left = object.axis >= 0 ? bvh_partition_object(refs, n, map, object.axis, object.bin, left, right)
+                                  : bvh_partition_median(refs, n, centroid_axis, left, right);
+        if (n_left == 0 || n_left == n) n_left = bvh_partition_median(refs, n, -1, left, right);
+        n_right = n - n_left;
+      }
+    }
+    // Spare capacity goes to the children in proportion to their reference counts.
+    const std::size_t spare = capacity - n_left - n_right;
+    const std::size_t cap_left = n_left + static_cast<std::size_t>(static_cast<unsigned __int128>(spare) * n_left /
+                                                                     (n_left + n_right));
+    const std::size_t cap_right = capacity - cap_left;
+    if (cap_left != n_left) std::memmove(refs + cap_left, refs + n_left, n_right * sizeof(BvhBuildRef));
+
+    const auto child = static_cast<std::uint32_t>(out.nodes.size());
+    out.nodes.resize(out.nodes.size() + 2);
+    out.nodes[slot].first = child;
+    out.nodes[slot].count = 0;
+    if (n >= kTaskMin) {
+      auto l = std::make_unique<BvhSubtree>(), r = std::make_unique<BvhSubtree>();
+      BvhSubtree &lt = *l, &rt = *r;
+      out.grafts.emplace_back(child, std::move(l));
+      out.grafts.emplace_back(child + 1, std::move(r));
+      tbb::parallel_invoke([&] { build(lt, 0, begin, n_left, cap_left, left, depth + 1); },
+                           [&] { build(rt, 0, begin + cap_left, n_right, cap_right, right, depth + 1); });
+    } else {
+      build(out, child, begin, n_left, cap_left, left, depth + 1);
+      build(out, child + 1, begin + cap_left, n_right, cap_right, right, depth + 1);
+    }
+  }
+
+ private:
+  static void make_leaf(BvhSubtree& out, std::uint32_t slot, std::size_t begin, std::size_t n) {
+    out.nodes[slot].first = static_cast<std::uint32_t>(begin);
+    out.nodes[slot].count = static_cast<std::uint32_t>(n);
+  }
+
+  /// A box containing the part of ref's primitive inside `part` (a sub-box of ref's box);
+  /// empty when the primitive does not meet `part`.
+  Bounds3f clip(const BvhBuildRef& ref, const Bounds3f& part) const {
+    if (scene_.is_sphere(ref.id)) return part;
+    const auto& t = scene_.mesh.triangles[ref.id];
+    const auto& v = scene_.mesh.vertices;
+    return clipped_triangle_bounds(v[t[0]], v[t[1]], v[t[2]], part);
+  }
+
+  /// Binned spatial split (Stich et al. §4.2): `bins` equal slabs of the node box per axis;
+  /// each reference is clipped to every slab it spans. Candidates adding more than `budget`
+  /// references are skipped.
+  SpatialSplit find_spatial_split(const BvhBuildRef* refs, std::size_t n, const Bounds3f& box,
+                                  std::size_t budget) const {
+    SpatialSplit best;
+    const int nb = config_.bins;
+    Bounds3f bin_box[kBvhMaxBins];
+    std::uint32_t entry[kBvhMaxBins], exit[kBvhMaxBins];
+    float right_area[kBvhMaxBins];
+    std::uint32_t right_count[kBvhMaxBins];
+    for (int a = 0; a < 3; ++a) {
+      const float lo = box.lo[a], extent = box.hi[a] - box.lo[a];
+      if (!(extent > 0.0f)) continue;
+      const float width = extent / static_cast<float>(nb), inv = static_cast<float>(nb) / extent;
+      auto plane = [&](int k) { return k >= nb ? box.hi[a] : lo + width * static_cast<float>(k); };
+      auto bin_of = [&](float x) { return std::clamp(static_cast<int>((x - lo) * inv), 0, nb - 1); };
+      for (int k = 0; k < nb; ++k) {
+        bin_box[k] = Bounds3f();
+        entry[k] = exit[k] = 0;
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const Bounds3f rb = refs[i].box();
+        const int first = bin_of(rb.lo[a]), last = bin_of(rb.hi[a]);
+        ++entry[first];
+        ++exit[last];
+        if (first == last) {
+          bin_box[first].extend(rb);
+          continue;
+        }
+        for (int k = first; k <= last; ++k) {
+          Bounds3f slab = rb;
+          slab.lo[a] = std::max(rb.lo[a], plane(k));
+          slab.hi[a] = std::min(rb.hi[a], plane(k + 1));
+          if (slab.lo[a] > slab.hi[a]) continue;
+          bin_box[k].extend(clip(refs[i], slab));
+        }
+      }
+      Bounds3f acc;
+      std::uint32_t count = 0;
+      for (int k = nb - 1; k > 0; --k) {
+        acc.extend(bin_box[k]);
+        count += exit[k];
+        right_area[k] = bvh_half_area(acc);
+        right_count[k] = count;
+      }
+      acc = Bounds3f();
+      count = 0;
+      for (int k = 1; k < nb; ++k) {
+        acc.extend(bin_box[k - 1]);
+        count += entry[k - 1];
+        const std::size_t nl = count, nr = right_count[k];
+        if (nl == 0 || nr == 0 || nl + nr > n + budget) continue;
+        const float cost = bvh_half_area(acc) * static_cast<float>(nl) + right_area[k] * static_cast<float>(nr);
+        if (cost < best.cost) {
+          best.cost = cost;
+          best.axis = a;
+          best.plane = plane(k);
+          best.left = acc;
+          best.left_count = nl;
+          best.right_count = nr;
+        }
+      }
+      if (best.axis == a) {
+        Bounds3f r;
+        for (int k = nb - 1; k >= 0 && plane(k) >= best.plane; --k) r.extend(bin_box[k]);
+        best.right = r;
+      }
+    }
+    return best;
+  }
+
+  /// Splits refs[0, n) at split.plane, clipping straddling references or keeping them whole on
+  /// the side the SAH prefers (Stich et al. §4.4), within capacity. Writes the left references
+  /// to refs[0, n_left) and the right ones after them. False (refs unchanged) when a side would
+  /// be empty.
+  bool apply_spatial_split(BvhBuildRef* refs, std::size_t n, std::size_t capacity, const SpatialSplit& split,
+                           BvhRangeBounds& left, BvhRangeBounds& right, std::size_t& n_left,
+                           std::size_t& n_right) const {
+    const int a = split.axis;
+    const float p = split.plane;
+    std::vector<BvhBuildRef> lrefs, rrefs;
+    lrefs.reserve(split.left_count);
+    rrefs.reserve(split.right_count);
+    Bounds3f lbox = split.left, rbox = split.right;
+    double nl = static_cast<double>(split.left_count), nr = static_cast<double>(split.right_count);
+    std::size_t spare = capacity - n;
+    for (std::size_t i = 0; i < n; ++i) {
+      const BvhBuildRef& ref = refs[i];
+      if (ref.hi[a] <= p) {
+        lrefs.push_back(ref);
+        continue;
+      }
+      if (ref.lo[a] >= p) {
+        rrefs.push_back(ref);
+        continue;
+      }
+      const Bounds3f rb = ref.box();
+      Bounds3f lpart = rb, rpart = rb;
+      lpart.hi[a] = p;
+      rpart.lo[a] = p;
+      lpart = clip(ref, lpart);
+      rpart = clip(ref, rpart);
+      if (lpart.empty() && rpart.empty()) lpart = rb;  // rounding: keep the whole reference
+      if (rpart.empty()) {
+        lrefs.push_back(BvhBuildRef::make(lpart, ref.id));
+        continue;
+      }
+      if (lpart.empty()) {
+        rrefs.push_back(BvhBuildRef::make(rpart, ref.id));
+        continue;
+      }
+      const double al = bvh_half_area(lbox), ar = bvh_half_area(rbox);
+      const double c_split = al * nl + ar * nr;
+      const double c_left = bvh_half_area(join(lbox, rb)) * nl + ar * (nr - 1.0);
+      const double c_right = al * (nl - 1.0) + bvh_half_area(join(rbox, rb)) * nr;
+      if (spare > 0 && c_split <= c_left && c_split <= c_right) {
+        --spare;
+        lrefs.push_back(BvhBuildRef::make(lpart, ref.id));
+        rrefs.push_back(BvhBuildRef::make(rpart, ref.id));
+      } else if (c_left <= c_right) {
+        lrefs.push_back(ref);
+        lbox.extend(rb);
+        nr -= 1.0;
+      } else {
+        rrefs.push_back(ref);
+        rbox.extend(rb);
+        nl -= 1.0;
+      }
+    }
+    if (lrefs.empty() || rrefs.empty()) return false;
+    n_left = lrefs.size();
+    n_right = rrefs.size();
+    std::copy(lrefs.begin(), lrefs.end(), refs);
+    std::copy(rrefs.begin(), rrefs.end(), refs + n_left);
+    left = bvh_range_bounds(refs, n_left);
+    right = bvh_range_bounds(refs + n_left, n_right);
+    return true;
+  }
+
+  const Scene& scene_;
+  const BvhConfig& config_;
+  BvhBuildRef* refs_;
+  float min_overlap_;  ///< alpha·SA(root), half areas
+};
+
+}  // namespace
+
+Bvh2 build_bvh_spatial(const Scene& scene, const BvhConfig& config) {
+  const std::size_t n = scene.primitive_count();
+  if (n == 0) return Bvh2{};
+  const double extra = std::max(0.0, config.max_duplication) * static_cast<double>(n);
+  const std::size_t capacity = n + static_cast<std::size_t>(std::min(extra, 4294967294.0));
+  if (capacity >= std::numeric_limits<std::uint32_t>::max())
+    throw std::length_error("build_bvh: SBVH reference capacity exceeds 2^32 - 1");
+  // Uninitialised: the pages past N are touched only where spatial splits use them.
+  std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[capacity]);
+  BvhRangeBounds bounds;
+  for (std::size_t i = 0; i < n; ++i) {
+    refs[i] = BvhBuildRef::make(bvh_build_box(scene.primitive_bounds(static_cast<unsigned>(i))),
+                                static_cast<std::uint32_t>(i));
+    bounds.extend(refs[i]);
+  }
+  BvhSubtree root;
+  tbb::task_arena arena(bvh_build_threads(config.threads));
+  arena.execute([&] {
+    SpatialBuilder(scene, config, refs.get(), bvh_half_area(bounds.box())).build(root, 0, 0, n, capacity, bounds, 0);
+  });
+  return bvh_concatenate(root, n, [&](std::size_t k) { return refs[k].id; });
+}
+
+}  // namespace raylab
