@@ -5,7 +5,8 @@
 ///    2013) lane by lane exactly as intersect_box (bounds.h) computes it: t = (bound - org)·inv
 ///    with a separate multiply, the far distance scaled by kIzeFarScale, and min/max operand
 ///    orders that reproduce intersect_box's branches, NaN (0·inf) lanes included. So a lane is
-///    hit exactly when intersect_box accepts that box, with the same entry distance.
+///    hit exactly when intersect_box accepts that box, with the same entry distance (up to the
+///    sign of a zero).
 ///  - WideBoxRay<N, false>: the fast slab test, near/far planes chosen by the direction's signs,
 ///    t = bound·inv - org·inv fused; may reject a box the ray touches within rounding.
 #include <cmath>
@@ -28,29 +29,51 @@ template <int N>
 struct WideBoxRay<N, true> {
   using F = simd::Float<N>;
   F org[3], inv[3];
+  int near[3], far[3];
+  bool finite_inverse;
   float tmin;
 
   explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
     const Vec3f i = safe_inverse(r.dir);
+    finite_inverse = true;
     for (int a = 0; a < 3; ++a) {
       org[a] = F::broadcast(r.org[a]);
       inv[a] = F::broadcast(i[a]);
+      near[a] = i[a] >= 0.0f ? a : 3 + a;
+      far[a] = i[a] >= 0.0f ? 3 + a : a;
+      finite_inverse = finite_inverse && std::isfinite(i[a]);
     }
   }
 
   /// Bit i set when child lane i (of bounds[6][N]) is hit on [tmin, tmax]; entry distances go
   /// to `entry` (32-byte aligned). Lanes past `used` are not masked here.
   unsigned hit(const float (*bounds)[N], float tmax, float* entry) const {
-    F t0 = F::broadcast(tmin), t1 = F::broadcast(tmax);
-    const F scale = F::broadcast(kIzeFarScale);
+    if (finite_inverse) {
+      // No component of the direction is zero: rounding is monotone, so lo <= hi gives
+      // (lo - o)·inv <= (hi - o)·inv for inv > 0 and >= for inv < 0, and no product is NaN;
+      // intersect_box's swap is then the choice of planes by the sign of inv (equal distances
+      // may differ in the sign of a zero, which no comparison sees). An empty lane (+inf, -inf)
+      // gives near = +inf, far = -inf and misses.
+      F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
+      for (int a = 0; a < 3; ++a) {
+        t0 = max((F::load(bounds[near[a]]) - org[a]) * inv[a], t0);
+        far_min = min((F::load(bounds[far[a]]) - org[a]) * inv[a], far_min);
+      }
+      const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
+      t0.store(entry);
+      return t0 <= t1;
+    }
+    // intersect_box scales each far distance and takes min(far·s, t1) per axis; rounding is
+    // monotone, so min over axes of far·s equals (min over axes of far)·s, NaN lanes skipped
+    // alike (the running minimum starts at +inf, and +inf·s = +inf leaves t1 unchanged).
+    F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a) {
       const F tn = (F::load(bounds[a]) - org[a]) * inv[a];
       const F tf = (F::load(bounds[3 + a]) - org[a]) * inv[a];
-      const F near = min(tf, tn);        // tn > tf ? tf : tn
-      const F far = max(tn, tf) * scale; // tn > tf ? tn : tf
-      t0 = max(near, t0);                // near > t0 ? near : t0 (NaN keeps t0)
-      t1 = min(far, t1);                 // far < t1 ? far : t1 (NaN keeps t1)
+      t0 = max(min(tf, tn), t0);        // near = tn > tf ? tf : tn; near > t0 ? near : t0 (NaN keeps t0)
+      far_min = min(max(tn, tf), far_min);  // far = tn > tf ? tn : tf; NaN keeps the running minimum
     }
+    const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
     t0.store(entry);
     return t0 <= t1;
   }

@@ -17,8 +17,10 @@ namespace raylab {
 /// returning true. Returns whether any leaf reported a hit; with kAnyHit the first report ends
 /// traversal.
 template <int N, bool kRobust, bool kAnyHit, class Counters, class LeafFn>
-bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& closest, Counters& counters, LeafFn&& leaf) {
+bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& closest_out, Counters& counters,
+                       LeafFn&& leaf) {
   const WideBoxRay<N, kRobust> r(ray);
+  float closest = closest_out;  // a register copy: the stack stores cannot alias it
   struct Entry {
     std::uint32_t ref;
     float t;
@@ -79,11 +81,17 @@ bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& close
       counters.leaf();
       if (leaf(WideRef::first(ref), WideRef::count(ref), closest)) {
         found = true;
-        if constexpr (kAnyHit) return true;
+        if constexpr (kAnyHit) {
+          closest_out = closest;
+          return true;
+        }
       }
     }
     for (;;) {
-      if (top == 0) return found;
+      if (top == 0) {
+        closest_out = closest;
+        return found;
+      }
       const Entry e = stack[--top];
       if (e.t <= closest) {
         ref = e.ref;
