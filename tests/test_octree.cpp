@@ -5,6 +5,8 @@
 #include "accel/common/tracer.h"
 #include "accel/octree/octree.h"
 #include "geometry/exact_predicates.h"
+#include "scene/ray_counters.h"
+#include <random>
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -67,13 +69,123 @@ TEST(Octree, RaysAlongCentrePlanesAgreeWithBruteForce) {
     }
     const auto brute = make_accelerator("brute", scene);
     const double diag = length(Vec3d(scene->bounds().diagonal()));
-    for (const std::string accel_spec : {"octree", "octree:clip=none", "octree:clip=bbox,mailbox=on"}) {
+    for (const std::string accel_spec : {"octree", "octree:clip=none", "octree:clip=bbox,mailbox=on", "octree:traversal=kd"}) {
       const auto accel = make_accelerator(accel_spec, scene);
       const auto ref = trace_rays(*brute, rays, TraceOptions{1, false, false});
       const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
       EXPECT_GT(ref.hit_count, 0u);
       EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, diag).mismatches, 0u) << accel_spec << " on " << spec;
       const auto ref_o = trace_rays(*brute, rays, TraceOptions{1, false, true});
+      const auto got_o = trace_rays(*accel, rays, TraceOptions{1, false, true});
+      EXPECT_EQ(compare_occlusion(got_o.blocked, ref_o.blocked).mismatches, 0u) << accel_spec << " on " << spec;
+    }
+  }
+}
+
+/// The parametric walk (Revelles et al.) visits leaves front to back, and visits every leaf
+/// whose box the ray crosses over an interval of positive length (computed in double).
+TEST(Octree, RevellesVisitsLeavesFrontToBackAndMissesNone) {
+  const auto scene = make_scene("soup:n=1500");
+  const Octree tree(scene, octree_config(""));
+  const Bounds3f root = tree.data().bounds;
+  std::vector<std::pair<Bounds3f, std::uint32_t>> leaves;  // box, node index
+  {
+    std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0, root}};
+    while (!todo.empty()) {
+      const auto [n, box] = todo.back();
+      todo.pop_back();
+      if (tree.data().nodes[n].is_leaf()) leaves.push_back({box, n});
+      else
+        for (unsigned i = 0; i < 8; ++i) todo.push_back({tree.data().nodes[n].first + i, octree_child_box(box, i)});
+    }
+  }
+  ASSERT_GT(leaves.size(), 64u);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const Vec3f ext = root.diagonal();
+  NoCounters counters;
+  for (int r = 0; r < 3000; ++r) {
+    Vec3f o, d;
+    for (int a = 0; a < 3; ++a) {
+      o[a] = root.lo[a] + ext[a] * (1.6f * u(rng) - 0.3f);
+      d[a] = 2.0f * u(rng) - 1.0f;
+    }
+    if (r % 5 == 0) d[r % 3] = (r % 2) ? 0.0f : -0.0f;  // a zero component of either sign
+    const Ray ray{o, d};
+    std::vector<std::uint32_t> order;
+    std::vector<float> enter;
+    octree_walk_revelles(
+        tree.data().nodes.data(), root, ray,
+        [&](std::uint32_t index, const Bounds3f&, float t_enter, float) {
+          order.push_back(index);
+          enter.push_back(t_enter);
+          return false;
+        },
+        [] { return std::numeric_limits<float>::infinity(); }, counters);
+    for (std::size_t i = 1; i < enter.size(); ++i)
+      EXPECT_GE(enter[i], enter[i - 1] - 1e-5f * (1.0f + std::abs(enter[i - 1]))) << "ray " << r << ", leaf " << i;
+    std::vector<std::uint32_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end()) << "ray " << r << " visits a leaf twice";
+    for (const auto& [box, index] : leaves) {
+      double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+      for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0f) {
+          if (o[a] < box.lo[a] || o[a] > box.hi[a]) t0 = t1 + 1.0;
+          continue;
+        }
+        double ta = (double(box.lo[a]) - o[a]) / d[a], tb = (double(box.hi[a]) - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+      }
+      if (t1 - t0 > 1e-9 * (1.0 + std::abs(t1))) {
+        EXPECT_TRUE(std::binary_search(sorted.begin(), sorted.end(), index)) << "ray " << r << " skips leaf " << index;
+      }
+    }
+  }
+}
+
+/// Axis-parallel rays with +0 and -0 components through the centres of the nodes (they lie in
+/// two centre planes of every ancestor at once), and diagonal rays through node centres
+/// (through the corners of eight children), against the exact oracle.
+TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
+  for (const std::string spec : {"soup:n=800", "walls:n=6,angle=30"}) {
+    const auto scene = make_scene(spec);
+    const Octree probe(scene, octree_config(""));
+    std::vector<Ray> rays;
+    std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0, probe.data().bounds}};
+    while (!todo.empty() && rays.size() < 6000) {
+      const auto [n, box] = todo.back();
+      todo.pop_back();
+      const Vec3f c(octree_mid(box, 0), octree_mid(box, 1), octree_mid(box, 2));
+      for (int a = 0; a < 3; ++a)
+        for (const float s : {1.0f, -1.0f}) {
+          Vec3f d(s > 0 ? 0.0f : -0.0f);
+          d[a] = s;
+          Vec3f o = c;
+          o[a] = s > 0 ? probe.data().bounds.lo[a] - 1.0f : probe.data().bounds.hi[a] + 1.0f;
+          rays.push_back({o, d});
+          Vec3f dn(s > 0 ? -0.0f : 0.0f);  // the other sign of zero
+          dn[a] = s;
+          rays.push_back({o, dn});
+        }
+      for (unsigned k = 0; k < 8; ++k) {
+        const Vec3f d((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, (k & 4) ? 1.0f : -1.0f);
+        rays.push_back({c - d * 2.0f * length(probe.data().bounds.diagonal()), d});
+      }
+      if (!probe.data().nodes[n].is_leaf())
+        for (unsigned i = 0; i < 8; ++i) todo.push_back({probe.data().nodes[n].first + i, octree_child_box(box, i)});
+    }
+    const auto oracle = make_accelerator("exact", scene);
+    const double diag = length(Vec3d(scene->bounds().diagonal()));
+    const auto ref = trace_rays(*oracle, rays, TraceOptions{1, false, false});
+    const auto ref_o = trace_rays(*oracle, rays, TraceOptions{1, false, true});
+    EXPECT_GT(ref.hit_count, 0u);
+    for (const std::string accel_spec : {"octree", "octree:clip=none,mailbox=on", "octree:traversal=kd"}) {
+      const auto accel = make_accelerator(accel_spec, scene);
+      const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
+      EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, diag).mismatches, 0u) << accel_spec << " on " << spec;
       const auto got_o = trace_rays(*accel, rays, TraceOptions{1, false, true});
       EXPECT_EQ(compare_occlusion(got_o.blocked, ref_o.blocked).mismatches, 0u) << accel_spec << " on " << spec;
     }

@@ -25,6 +25,8 @@ OctreeConfig read_octree_config(SpecReader& r) {
   c.cost.c_isect = r.get_double("c_isect", 1.5, 1e-6, 1e6);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 20));
   c.mailbox = r.get_bool("mailbox", false);
+  c.traversal = r.get_choice("traversal", "revelles", {"revelles", "kd"}) == "kd" ? OctreeTraversal::kd
+                                                                                 : OctreeTraversal::revelles;
   return c;
 }
 
@@ -48,7 +50,9 @@ AccelKind make_octree_kind() {
            {"c_trav", "1", "traversal cost of the termination rule"},
            {"c_isect", "1.5", "intersection cost of the termination rule"},
            {"max_depth", "0", "safety depth limit; 0 = 3 + ceil(log8 N), at most 20"},
-           {"mailbox", "off", "skip primitives a ray already tested"}},
+           {"mailbox", "off", "skip primitives a ray already tested"},
+           {"traversal", "revelles",
+            "revelles (parametric, Revelles et al. 2000) | kd (centre planes as three kd-tree splits)"}},
           [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_octree(std::move(scene), read_octree_config(r)); },
           [](SpecReader& r) -> AccuracyBound {
             read_octree_config(r);
@@ -56,7 +60,7 @@ AccelKind make_octree_kind() {
                     "exact agreement (watertight kernel, conservative placement and traversal), except on rays "
                     "grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
           },
-          {"clip=none", "clip=bbox,mailbox=on"}};
+          {"clip=none", "clip=bbox,mailbox=on", "traversal=kd", "clip=none,traversal=kd,mailbox=on"}};
 }
 
 namespace {

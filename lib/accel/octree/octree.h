@@ -38,8 +38,12 @@ class Octree final : public AggregateBase<Octree> {
   template <bool kAnyHit, class Counters>
   bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
     const OctreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
-    return config_.mailbox ? octree_traverse<WatertightKernel, kAnyHit, true>(view, ray, hit, counters)
-                           : octree_traverse<WatertightKernel, kAnyHit, false>(view, ray, hit, counters);
+    using K = WatertightKernel;
+    if (config_.traversal == OctreeTraversal::revelles)
+      return config_.mailbox ? octree_traverse_revelles<K, kAnyHit, true>(view, ray, hit, counters)
+                             : octree_traverse_revelles<K, kAnyHit, false>(view, ray, hit, counters);
+    return config_.mailbox ? octree_traverse_kd<K, kAnyHit, true>(view, ray, hit, counters)
+                           : octree_traverse_kd<K, kAnyHit, false>(view, ray, hit, counters);
   }
 
   std::shared_ptr<const Scene> scene_;

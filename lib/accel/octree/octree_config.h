@@ -5,6 +5,11 @@
 
 namespace raylab {
 
+enum class OctreeTraversal {
+  revelles,  ///< Revelles, Ureña and Lastra 2000: parametric, first-node and next-node tables, mirroring
+  kd,        ///< the three centre planes of a node taken as three kd-tree splits
+};
+
 struct OctreeConfig {
   ClipMode clip = ClipMode::exact;  ///< placement and clipping as in the kd-tree (split_clipping.h)
   /// A node is split at its centre when C_trav + Σ SA(child)/SA·N(child)·C_isect < N·C_isect,
@@ -14,6 +19,7 @@ struct OctreeConfig {
   int max_depth = 0;
   /// Remember the last primitives tested by a ray and skip repeats.
   bool mailbox = false;
+  OctreeTraversal traversal = OctreeTraversal::revelles;
 };
 
 int octree_max_depth(const OctreeConfig& config, std::size_t n);

@@ -1,16 +1,19 @@
 #pragma once
-/// Front-to-back octree traversal in ray order, after the parametric algorithm of Revelles,
-/// Ureña and Lastra, "An Efficient Parametric Algorithm for Octree Traversal" (WSCG 2000): the
-/// ray's parameters at the node's three centre planes order the children it crosses. Here the
-/// three planes are taken one at a time (x, then y, then z), each exactly as a kd-tree split
-/// (kdtree_traversal.h: the plane's t is computed once, widened by its rounding error, and a ray
-/// lying in a plane visits one side), which visits the same children in the same order and
-/// keeps the kd-tree's robustness for axis-parallel rays and rays along cell faces.
+/// Front-to-back octree traversal in ray order, two ways (OctreeConfig::traversal):
+///  - octree_traverse_revelles: the parametric algorithm of Revelles, Ureña and Lastra (WSCG
+///    2000), octree_revelles.h.
+///  - octree_traverse_kd: each node's three centre planes taken one at a time (x, then y, then
+///    z), each exactly as a kd-tree split (kdtree_traversal.h: the plane's t is computed once,
+///    widened by its rounding error, and a ray lying in a plane visits one side). It visits the
+///    same children in the same order as Revelles's algorithm, by a different mechanism (up to
+///    three plane crossings per node instead of one ordered walk over the eight children), and
+///    is kept for comparison.
 #include <cmath>
 #include <cstdint>
 
 #include "accel/kdtree/kdtree_traversal.h"
 #include "accel/octree/octree_node.h"
+#include "accel/octree/octree_revelles.h"
 
 namespace raylab {
 
@@ -22,7 +25,7 @@ struct OctreeView {
 };
 
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
-bool octree_traverse(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
+bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
   float t0, t1;
   if (!kd_root_interval(tree.bounds, ray, inv, t0, t1)) return false;
@@ -87,6 +90,32 @@ bool octree_traverse(const OctreeView& tree, const Ray& ray, Hit& hit, Counters&
       e.level = level;
     }
   }
+  return found;
+}
+
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+bool octree_traverse_revelles(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
+  auto ctx = Kernel::prepare(ray);
+  KdMailbox<kMailbox> mailbox;
+  bool found = false;
+  auto leaf = [&](std::uint32_t index, const Bounds3f&, float, float) {
+    const OctNode& node = tree.nodes[index];
+    counters.leaf();
+    const std::uint32_t* p = tree.prims + node.first;
+    for (std::uint32_t i = 0; i < node.count; ++i) {
+      if (mailbox.seen(p[i])) {
+        counters.mailbox_skip();
+        continue;
+      }
+      if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
+        found = true;
+        if constexpr (kAnyHit) return true;
+      }
+    }
+    return false;
+  };
+  auto cut = [&] { return Kernel::closest(ctx); };
+  octree_walk_revelles(tree.nodes, tree.bounds, ray, leaf, cut, counters);
   return found;
 }
 
