@@ -143,7 +143,8 @@ void check_box_test(std::mt19937& rng) {
       }
     const WideBoxRay<N, true> wide(c.ray);
     alignas(32) float entry[N];
-    const unsigned mask = wide.hit(node.bounds, c.ray.tmax, entry);
+    node.used = N;
+    const unsigned mask = wide.hit(node, c.ray.tmax, entry);
     const Vec3f inv = safe_inverse(c.ray.dir);
     for (int i = 0; i < N; ++i) {
       float t0 = 0, t1 = 0;
@@ -156,6 +157,16 @@ void check_box_test(std::mt19937& rng) {
         ASSERT_EQ(t0, entry[i]) << "trial " << trial << " lane " << i;  // +0 == -0
       }
     }
+    // Unused lanes hold empty boxes and are never hit, by either variant.
+    node.used = N / 2;
+    for (int i = N / 2; i < N; ++i)
+      for (int a = 0; a < 3; ++a) {
+        node.bounds[a][i] = std::numeric_limits<float>::infinity();
+        node.bounds[3 + a][i] = -std::numeric_limits<float>::infinity();
+      }
+    ASSERT_EQ(wide.hit(node, c.ray.tmax, entry) >> (N / 2), 0u);
+    const WideBoxRay<N, false> fast(c.ray);
+    ASSERT_EQ(fast.hit(node, c.ray.tmax, entry) >> (N / 2), 0u);
   }
   EXPECT_GT(hits, 1000);
   EXPECT_GT(nan_cases, 100);

@@ -31,6 +31,7 @@ struct PacketKernel<WatertightKernel> {
   using F = simd::Float<kPacketWidth>;
   struct Ray {
     F ox, oy, oz, sx, sy, sz;
+    Ray() = default;
     explicit Ray(const WatertightKernel::Context& c)
         : ox(F::broadcast(c.org[c.kx])),
           oy(F::broadcast(c.org[c.ky])),
@@ -97,6 +98,7 @@ struct PacketKernel<MollerTrumboreKernel> {
   using F = simd::Float<kPacketWidth>;
   struct Ray {
     F o[3], d[3];
+    Ray() = default;
     explicit Ray(const MollerTrumboreKernel::Context& c) {
       for (int a = 0; a < 3; ++a) {
         o[a] = F::broadcast(c.ray.org[a]);

@@ -34,7 +34,9 @@ struct WideBoxRay<N, true> {
   float tmin;
 
   explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
-    const Vec3f i = safe_inverse(r.dir);
+    // safe_inverse as one division: IEEE 1/±0 is ±inf, as safe_inverse's copysign.
+    alignas(16) float i[4];
+    _mm_store_ps(i, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(r.dir.x, r.dir.y, r.dir.z, 1.0f)));
     finite_inverse = true;
     for (int a = 0; a < 3; ++a) {
       org[a] = F::broadcast(r.org[a]);
@@ -45,9 +47,10 @@ struct WideBoxRay<N, true> {
     }
   }
 
-  /// Bit i set when child lane i (of bounds[6][N]) is hit on [tmin, tmax]; entry distances go
-  /// to `entry` (32-byte aligned). Lanes past `used` are not masked here.
-  unsigned hit(const float (*bounds)[N], float tmax, float* entry) const {
+  /// Bit i set when child i of `node` is hit on [tmin, tmax]; entry distances go to `entry`
+  /// (32-byte aligned).
+  unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
+    const float (*bounds)[N] = node.bounds;
     if (finite_inverse) {
       // No component of the direction is zero: rounding is monotone, so lo <= hi gives
       // (lo - o)·inv <= (hi - o)·inv for inv > 0 and >= for inv < 0, and no product is NaN;
@@ -75,7 +78,7 @@ struct WideBoxRay<N, true> {
     }
     const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
     t0.store(entry);
-    return t0 <= t1;
+    return (t0 <= t1) & ((1u << node.used) - 1);  // an inverted slab is swapped: mask empty lanes
   }
 };
 
@@ -97,7 +100,9 @@ struct WideBoxRay<N, false> {
     }
   }
 
-  unsigned hit(const float (*bounds)[N], float tmax, float* entry) const {
+  /// As the robust test; empty lanes (+inf, -inf) give near = +inf > far and miss.
+  unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
+    const float (*bounds)[N] = node.bounds;
     F t0 = F::broadcast(tmin), t1 = F::broadcast(tmax);
     for (int a = 0; a < 3; ++a) {
       t0 = max(fmsub(F::load(bounds[near[a]]), inv[a], org_inv[a]), t0);

@@ -37,7 +37,8 @@ template <int N>
 struct alignas(64) WideBvhNode {
   static_assert(N == 4 || N == 8);
   /// bounds[0..2]: lo x, y, z; bounds[3..5]: hi x, y, z. Unused lanes hold empty boxes
-  /// (+inf, -inf); traversal masks them with `used` (the robust slab test swaps an inverted slab).
+  /// (+inf, -inf), which the box tests miss by plane choice; where the robust test mirrors
+  /// intersect_box's swap (a zero direction component) it masks them with `used` instead.
   float bounds[6][N];
   std::uint32_t child[N];
   std::uint32_t used = 0;  ///< lanes [0, used) are children

@@ -35,7 +35,7 @@ bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& close
     if (!WideRef::is_leaf(ref)) {
       const WideBvhNode<N>& node = nodes[ref];
       counters.node();
-      unsigned mask = r.hit(node.bounds, closest, entry) & ((1u << node.used) - 1);
+      unsigned mask = r.hit(node, closest, entry);
       if (mask != 0) {
         const int i = std::countr_zero(mask);
         mask &= mask - 1;
