@@ -4,6 +4,8 @@
 /// (bvh_subtree.h). Which nodes become tasks depends only on reference counts, and bins merge
 /// exactly (min/max, integer sums), so the tree is the same with any thread count.
 ///
+/// Nodes of at most kBvhSmallSweepMax references use a full sweep instead of bins.
+///
 /// Work: O(N) per tree level (one binning pass and one partition pass), O(N log N) in all for
 /// trees of logarithmic depth; no heap allocation per node below kParallelBinMin references.
 #include <tbb/blocked_range.h>
@@ -42,6 +44,15 @@ class BinnedSahBuilder {
     if (depth >= kBvhMaxDepth - 32 || centroid_axis < 0) {
       if (small) return make_leaf(out, slot, begin, n);
       mid = bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
+    } else if (n <= kBvhSmallSweepMax) {
+      const BvhSweepSplit s = bvh_best_small_split(refs_ + begin, n);
+      const double half_area = bvh_half_area(box);
+      const double split_cost = s.axis >= 0 && half_area > 0.0 ? bvh_split_cost(config_.cost, s.cost, half_area)
+                                                                 : std::numeric_limits<double>::infinity();
+      if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n)))
+        return make_leaf(out, slot, begin, n);
+      mid = s.axis >= 0 ? bvh_partition_small(refs_ + begin, n, s, left, right)
+                        : bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
     } else {
       const BvhBinMapping map(bounds, config_.bins);
       const BvhObjectSplit s = find_split(begin, n, map);

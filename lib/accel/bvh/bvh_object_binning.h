@@ -22,9 +22,9 @@ inline constexpr int kBvhMaxBins = 256;
 
 /// Half the surface area of the box in lanes 0..2 of lo, hi; 0 for an empty box.
 inline float bvh_half_area(__m128 lo, __m128 hi) {
-  alignas(16) float d[4];
-  _mm_store_ps(d, _mm_max_ps(_mm_sub_ps(hi, lo), _mm_setzero_ps()));
-  return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+  const __m128 d = _mm_max_ps(_mm_sub_ps(hi, lo), _mm_setzero_ps());
+  const __m128 p = _mm_mul_ps(d, _mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 0, 2, 1)));  // xy, yz, zx
+  return _mm_cvtss_f32(_mm_add_ss(p, _mm_add_ss(_mm_shuffle_ps(p, p, 1), _mm_movehl_ps(p, p))));
 }
 inline float bvh_half_area(const Bounds3f& b) {
   if (b.empty()) return 0.0f;
@@ -96,10 +96,20 @@ struct BvhBinMapping {
     f = _mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), _mm_set1_ps(static_cast<float>(bins - 1)));
     return _mm_cvttps_epi32(f);
   }
-  int bin(const BvhBuildRef& r, int axis) const {
-    alignas(16) int b[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(b), bin(r));
-    return b[axis];
+  /// The same bin as lane `axis` of bin(r) (the same IEEE operations, in scalar code).
+  int bin(const BvhBuildRef& r, int axis, float origin_a, float scale_a) const {
+    float f = (r.lo[axis] + r.hi[axis] - origin_a) * scale_a;
+    f = std::min(std::max(f, 0.0f), static_cast<float>(bins - 1));
+    return static_cast<int>(f);
+  }
+  float origin_of(int axis) const { return lane(origin, axis); }
+  float scale_of(int axis) const { return lane(scale, axis); }
+
+ private:
+  static float lane(__m128 v, int axis) {
+    alignas(16) float f[4];
+    _mm_store_ps(f, v);
+    return f[axis];
   }
 };
 
@@ -210,16 +220,79 @@ inline double bvh_split_cost(const BvhSahCost& c, double split_cost, double half
 inline std::size_t bvh_partition_object(BvhBuildRef* refs, std::size_t n, const BvhBinMapping& map, int axis, int split_bin,
                                         BvhRangeBounds& left, BvhRangeBounds& right) {
   std::size_t i = 0, j = n;
-  auto goes_left = [&](const BvhBuildRef& r) { return map.bin(r, axis) < split_bin; };
+  const float origin = map.origin_of(axis), scale = map.scale_of(axis);
+  auto goes_left = [&](const BvhBuildRef& r) { return map.bin(r, axis, origin, scale) < split_bin; };
+  BvhRangeBounds l, r;  // locals stay in registers
   for (;;) {
-    while (i < j && goes_left(refs[i])) left.extend(refs[i++]);
-    while (i < j && !goes_left(refs[j - 1])) right.extend(refs[--j]);
+    while (i < j && goes_left(refs[i])) l.extend(refs[i++]);
+    while (i < j && !goes_left(refs[j - 1])) r.extend(refs[--j]);
     if (i >= j) break;
     std::swap(refs[i], refs[j - 1]);
-    left.extend(refs[i++]);
-    right.extend(refs[--j]);
+    l.extend(refs[i++]);
+    r.extend(refs[--j]);
   }
+  left = l;
+  right = r;
   return i;
+}
+
+/// Nodes of at most this many references are split by a full sweep over sorted centroids
+/// instead of bins: exact SAH candidates, and cheaper than resetting and sweeping 3·bins bins.
+inline constexpr std::size_t kBvhSmallSweepMax = 12;
+
+/// The best full-sweep SAH split of a small node (n <= kBvhSmallSweepMax): the first
+/// `left_count` references in centroid order on `axis` (ties by id) go left.
+struct BvhSweepSplit {
+  int axis = -1;
+  std::size_t left_count = 0;
+  float cost = std::numeric_limits<float>::infinity();  ///< N_A·S_A + N_B·S_B, half areas
+};
+
+inline bool bvh_centroid_less(const BvhBuildRef& x, const BvhBuildRef& y, int axis) {
+  const float cx = x.centroid2(axis), cy = y.centroid2(axis);
+  return cx < cy || (cx == cy && x.id < y.id);
+}
+
+inline BvhSweepSplit bvh_best_small_split(const BvhBuildRef* refs, std::size_t n) {
+  BvhSweepSplit best;
+  std::uint8_t order[kBvhSmallSweepMax];
+  float key[kBvhSmallSweepMax];
+  float right_area[kBvhSmallSweepMax];
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < n; ++i) {  // insertion sort by centroid; equal keys keep index (id) order
+      const float k = refs[i].centroid2(a);
+      std::size_t j = i;
+      while (j > 0 && (k < key[j - 1] || (k == key[j - 1] && refs[i].id < refs[order[j - 1]].id))) {
+        order[j] = order[j - 1];
+        key[j] = key[j - 1];
+        --j;
+      }
+      order[j] = static_cast<std::uint8_t>(i);
+      key[j] = k;
+    }
+    BvhRangeBounds acc;
+    for (std::size_t i = n; i-- > 1;) {
+      acc.extend(refs[order[i]]);
+      right_area[i] = bvh_half_area(acc.lo, acc.hi);
+    }
+    acc = BvhRangeBounds();
+    for (std::size_t i = 1; i < n; ++i) {
+      acc.extend(refs[order[i - 1]]);
+      const float cost = bvh_half_area(acc.lo, acc.hi) * static_cast<float>(i) + right_area[i] * static_cast<float>(n - i);
+      if (cost < best.cost) best = {a, i, cost};
+    }
+  }
+  return best;
+}
+
+/// Applies a small split: sorts refs[0, n) by centroid on split.axis and returns left_count.
+inline std::size_t bvh_partition_small(BvhBuildRef* refs, std::size_t n, const BvhSweepSplit& split,
+                                       BvhRangeBounds& left, BvhRangeBounds& right) {
+  const int a = split.axis;
+  std::sort(refs, refs + n, [a](const BvhBuildRef& x, const BvhBuildRef& y) { return bvh_centroid_less(x, y, a); });
+  left = bvh_range_bounds(refs, split.left_count);
+  right = bvh_range_bounds(refs + split.left_count, n - split.left_count);
+  return split.left_count;
 }
 
 /// The median split of refs[0, n) by centroid on `axis` (ties by primitive id), or the middle

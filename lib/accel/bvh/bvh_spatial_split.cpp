@@ -66,14 +66,24 @@ class SpatialBuilder {
     } else {
       const BvhBinMapping map(bounds, config_.bins);
       BvhObjectSplit object;
-      {
+      BvhSweepSplit sweep;
+      BvhRangeBounds small_left, small_right;
+      if (n <= kBvhSmallSweepMax) {
+        sweep = bvh_best_small_split(refs, n);
+        object.cost = sweep.cost;
+        if (sweep.axis >= 0) {  // partitioned now; a spatial split or a leaf may still follow
+          bvh_partition_small(refs, n, sweep, small_left, small_right);
+          object.left = small_left.box();
+          object.right = small_right.box();
+        }
+      } else {
         BvhObjectBins bins;
         bins.reset(config_.bins);
         bins.add(refs, n, map);
         object = bvh_best_object_split(bins);
       }
       SpatialSplit spatial;
-      if (capacity > n && (object.axis < 0 || bvh_half_area(intersect(object.left, object.right)) > min_overlap_))
+      if (capacity > n && (object.left.empty() || bvh_half_area(intersect(object.left, object.right)) > min_overlap_))
         spatial = find_spatial_split(refs, n, box, capacity - n);
       const double half_area = bvh_half_area(box);
       const double best = std::min(object.cost, spatial.cost);
@@ -81,11 +91,18 @@ class SpatialBuilder {
                                     ? bvh_split_cost(config_.cost, best, half_area)
                                     : std::numeric_limits<double>::infinity();
       if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n))) return make_leaf(out, slot, begin, n);
-      if (spatial.cost < object.cost && apply_spatial_split(refs, n, capacity, spatial, left, right, n_left, n_right)) {
-        // refs_[begin, begin + n_left) and refs_[begin + n_left, + n_right) hold the children.
-      } else {
-        n_left = object.axis >= 0 ? bvh_partition_object(refs, n, map, object.axis, object.bin, left, right)
-                                  : bvh_partition_median(refs, n, centroid_axis, left, right);
+      const bool spatial_applied =
+          spatial.cost < object.cost && apply_spatial_split(refs, n, capacity, spatial, left, right, n_left, n_right);
+      if (!spatial_applied) {
+        if (sweep.axis >= 0) {
+          n_left = sweep.left_count;
+          left = small_left;
+          right = small_right;
+        } else if (object.axis >= 0) {
+          n_left = bvh_partition_object(refs, n, map, object.axis, object.bin, left, right);
+        } else {
+          n_left = bvh_partition_median(refs, n, centroid_axis, left, right);
+        }
         if (n_left == 0 || n_left == n) n_left = bvh_partition_median(refs, n, -1, left, right);
         n_right = n - n_left;
       }
@@ -129,73 +146,186 @@ class SpatialBuilder {
     return clipped_triangle_bounds(v[t[0]], v[t[1]], v[t[2]], part);
   }
 
-  /// Binned spatial split (Stich et al. §4.2): `bins` equal slabs of the node box per axis;
-  /// each reference is clipped to every slab it spans. Candidates adding more than `budget`
-  /// references are skipped.
+  /// The primitive's corners (a sphere: the two corners of its box, which split_estimate then
+  /// treats as the segment between them).
+  struct Corners {
+    float p[3][3];
+    int count;
+  };
+  Corners corners(const BvhBuildRef& ref) const {
+    Corners c{};
+    if (scene_.is_sphere(ref.id)) {
+      c.count = 0;
+      return c;
+    }
+    const auto& t = scene_.mesh.triangles[ref.id];
+    for (int i = 0; i < 3; ++i) {
+      const Vec3f& v = scene_.mesh.vertices[t[i]];
+      c.p[i][0] = v.x;
+      c.p[i][1] = v.y;
+      c.p[i][2] = v.z;
+    }
+    c.count = 3;
+    return c;
+  }
+
+  /// The parts of a primitive (its corners) inside `box` on either side of the plane
+  /// x[axis] = pos, for estimating spatial bins (Stich et al. §4.2: split the triangle's edges
+  /// at the plane, bound the pieces, intersect with the reference's box). Float arithmetic: an
+  /// estimate, not a conservative bound; the applied split clips conservatively (clip()).
+  static void split_estimate(const Corners& c, const Bounds3f& box, int axis, float pos, Bounds3f& left,
+                             Bounds3f& right) {
+    if (c.count == 0) {  // a sphere: its box, cut
+      left = right = box;
+    } else {
+      float llo[3], lhi[3], rlo[3], rhi[3];
+      for (int k = 0; k < 3; ++k) {
+        llo[k] = rlo[k] = std::numeric_limits<float>::infinity();
+        lhi[k] = rhi[k] = -std::numeric_limits<float>::infinity();
+      }
+      auto add = [](float* lo, float* hi, const float* p) {
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], p[k]);
+          hi[k] = std::max(hi[k], p[k]);
+        }
+      };
+      for (int e = 0; e < 3; ++e) {
+        const float* a = c.p[e];
+        const float* b = c.p[e == 2 ? 0 : e + 1];
+        const float da = a[axis] - pos, db = b[axis] - pos;
+        if (da <= 0.0f) add(llo, lhi, a);
+        if (da >= 0.0f) add(rlo, rhi, a);
+        if ((da < 0.0f && db > 0.0f) || (da > 0.0f && db < 0.0f)) {
+          const float t = da / (da - db);
+          float p[3] = {a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t};
+          p[axis] = pos;
+          add(llo, lhi, p);
+          add(rlo, rhi, p);
+        }
+      }
+      for (int k = 0; k < 3; ++k) {  // empty stays empty: lo = +inf, hi = -inf
+        left.lo[k] = std::max(llo[k], box.lo[k]);
+        left.hi[k] = std::min(lhi[k], box.hi[k]);
+        right.lo[k] = std::max(rlo[k], box.lo[k]);
+        right.hi[k] = std::min(rhi[k], box.hi[k]);
+      }
+    }
+    left.hi[axis] = std::min(left.hi[axis], pos);
+    right.lo[axis] = std::max(right.lo[axis], pos);
+  }
+
+  /// Binned spatial split (Stich et al. §4.2): spatial_bins() equal slabs of the node box per
+  /// axis, all three axes in one pass; a reference spanning several slabs is chopped into them
+  /// (split_estimate). Candidates adding more than `budget` references are skipped.
   SpatialSplit find_spatial_split(const BvhBuildRef* refs, std::size_t n, const Bounds3f& box,
                                   std::size_t budget) const {
+    const int nb = spatial_bins();
+    struct Bin {
+      __m128 lo, hi;
+    };
+    Bin bin[3][kBvhMaxBins];
+    std::uint32_t entry[3][kBvhMaxBins], exit[3][kBvhMaxBins];
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), ninf = _mm_sub_ps(_mm_setzero_ps(), inf);
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < nb; ++k) {
+        bin[a][k] = {inf, ninf};
+        entry[a][k] = exit[a][k] = 0;
+      }
+    float width[3], inv[3];
+    bool valid[3];
+    for (int a = 0; a < 3; ++a) {
+      const float extent = box.hi[a] - box.lo[a];
+      valid[a] = extent > 0.0f;
+      width[a] = extent / static_cast<float>(nb);
+      inv[a] = valid[a] ? static_cast<float>(nb) / extent : 0.0f;
+    }
+    auto plane = [&](int a, int k) { return k >= nb ? box.hi[a] : box.lo[a] + width[a] * static_cast<float>(k); };
+    const __m128 origin = _mm_setr_ps(box.lo.x, box.lo.y, box.lo.z, 0.0f);
+    const __m128 scale = _mm_setr_ps(inv[0], inv[1], inv[2], 0.0f);
+    const __m128 top = _mm_set1_ps(static_cast<float>(nb - 1));
+    auto bins_of = [&](__m128 x) {
+      const __m128 f = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(x, origin), scale), _mm_setzero_ps()), top);
+      return _mm_cvttps_epi32(f);
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const __m128 l = _mm_load_ps(refs[i].lo), h = _mm_load_ps(refs[i].hi);
+      alignas(16) int first[4], last[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(first), bins_of(l));
+      _mm_store_si128(reinterpret_cast<__m128i*>(last), bins_of(h));
+      bool corners_loaded = false;
+      Corners c;
+      for (int a = 0; a < 3; ++a) {
+        if (!valid[a]) continue;
+        ++entry[a][first[a]];
+        ++exit[a][last[a]];
+        if (first[a] == last[a]) {
+          Bin& b = bin[a][first[a]];
+          b.lo = _mm_min_ps(b.lo, l);
+          b.hi = _mm_max_ps(b.hi, h);
+          continue;
+        }
+        if (!corners_loaded) {
+          c = corners(refs[i]);
+          corners_loaded = true;
+        }
+        Bounds3f rest = refs[i].box();  // chop the reference into the bins it spans
+        for (int k = first[a]; k <= last[a]; ++k) {
+          Bounds3f part;
+          if (k < last[a]) {
+            split_estimate(c, rest, a, plane(a, k + 1), part, rest);
+          } else {
+            part = rest;
+          }
+          if (part.empty()) continue;
+          Bin& b = bin[a][k];
+          b.lo = _mm_min_ps(b.lo, _mm_setr_ps(part.lo.x, part.lo.y, part.lo.z, 0.0f));
+          b.hi = _mm_max_ps(b.hi, _mm_setr_ps(part.hi.x, part.hi.y, part.hi.z, 0.0f));
+        }
+      }
+    }
     SpatialSplit best;
-    const int nb = config_.bins;
-    Bounds3f bin_box[kBvhMaxBins];
-    std::uint32_t entry[kBvhMaxBins], exit[kBvhMaxBins];
     float right_area[kBvhMaxBins];
     std::uint32_t right_count[kBvhMaxBins];
     for (int a = 0; a < 3; ++a) {
-      const float lo = box.lo[a], extent = box.hi[a] - box.lo[a];
-      if (!(extent > 0.0f)) continue;
-      const float width = extent / static_cast<float>(nb), inv = static_cast<float>(nb) / extent;
-      auto plane = [&](int k) { return k >= nb ? box.hi[a] : lo + width * static_cast<float>(k); };
-      auto bin_of = [&](float x) { return std::clamp(static_cast<int>((x - lo) * inv), 0, nb - 1); };
-      for (int k = 0; k < nb; ++k) {
-        bin_box[k] = Bounds3f();
-        entry[k] = exit[k] = 0;
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        const Bounds3f rb = refs[i].box();
-        const int first = bin_of(rb.lo[a]), last = bin_of(rb.hi[a]);
-        ++entry[first];
-        ++exit[last];
-        if (first == last) {
-          bin_box[first].extend(rb);
-          continue;
-        }
-        for (int k = first; k <= last; ++k) {
-          Bounds3f slab = rb;
-          slab.lo[a] = std::max(rb.lo[a], plane(k));
-          slab.hi[a] = std::min(rb.hi[a], plane(k + 1));
-          if (slab.lo[a] > slab.hi[a]) continue;
-          bin_box[k].extend(clip(refs[i], slab));
-        }
-      }
-      Bounds3f acc;
+      if (!valid[a]) continue;
+      __m128 lo = inf, hi = ninf;
       std::uint32_t count = 0;
       for (int k = nb - 1; k > 0; --k) {
-        acc.extend(bin_box[k]);
-        count += exit[k];
-        right_area[k] = bvh_half_area(acc);
+        lo = _mm_min_ps(lo, bin[a][k].lo);
+        hi = _mm_max_ps(hi, bin[a][k].hi);
+        count += exit[a][k];
+        right_area[k] = bvh_half_area(lo, hi);
         right_count[k] = count;
       }
-      acc = Bounds3f();
+      lo = inf;
+      hi = ninf;
       count = 0;
+      int best_k = -1;
       for (int k = 1; k < nb; ++k) {
-        acc.extend(bin_box[k - 1]);
-        count += entry[k - 1];
+        lo = _mm_min_ps(lo, bin[a][k - 1].lo);
+        hi = _mm_max_ps(hi, bin[a][k - 1].hi);
+        count += entry[a][k - 1];
         const std::size_t nl = count, nr = right_count[k];
         if (nl == 0 || nr == 0 || nl + nr > n + budget) continue;
-        const float cost = bvh_half_area(acc) * static_cast<float>(nl) + right_area[k] * static_cast<float>(nr);
+        const float cost = bvh_half_area(lo, hi) * static_cast<float>(nl) + right_area[k] * static_cast<float>(nr);
         if (cost < best.cost) {
           best.cost = cost;
           best.axis = a;
-          best.plane = plane(k);
-          best.left = acc;
+          best.plane = plane(a, k);
           best.left_count = nl;
           best.right_count = nr;
+          best_k = k;
         }
       }
-      if (best.axis == a) {
-        Bounds3f r;
-        for (int k = nb - 1; k >= 0 && plane(k) >= best.plane; --k) r.extend(bin_box[k]);
-        best.right = r;
+      if (best_k >= 0) {
+        BvhRangeBounds l, r;
+        for (int k = 0; k < nb; ++k) {
+          BvhRangeBounds& side = k < best_k ? l : r;
+          side.lo = _mm_min_ps(side.lo, bin[a][k].lo);
+          side.hi = _mm_max_ps(side.hi, bin[a][k].hi);
+        }
+        best.left = l.box();
+        best.right = r.box();
       }
     }
     return best;
@@ -268,6 +398,10 @@ class SpatialBuilder {
     right = bvh_range_bounds(refs + n_left, n_right);
     return true;
   }
+
+  /// Half the object bins (at least 2): Embree's SBVH bins 32 object and 16 spatial slabs,
+  /// and chopping references costs one split per slab spanned.
+  int spatial_bins() const { return std::max(2, config_.bins / 2); }
 
   const Scene& scene_;
   const BvhConfig& config_;

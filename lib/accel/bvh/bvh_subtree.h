@@ -41,6 +41,9 @@ Bvh2 bvh_concatenate(const BvhSubtree& root, std::size_t primitive_count, RefId&
     for (const auto& [g, sub] : s.grafts) self(self, *sub, slot(g));
   };
   place(place, root, 0u);
+  std::size_t refs = 0;
+  for (const Bvh2Node& n : bvh.nodes) refs += n.count;
+  bvh.prims.reserve(refs);
   for (Bvh2Node& n : bvh.nodes) {
     if (!n.is_leaf()) continue;
     const auto first = static_cast<std::uint32_t>(bvh.prims.size());
