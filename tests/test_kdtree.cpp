@@ -163,6 +163,48 @@ TEST(KdTree, RaysInAndAlongSplitPlanesAgreeWithBruteForce) {
   }
 }
 
+/// The cache-line layout holds the same tree: walked in parallel with the build layout, every
+/// node has the same split or leaf range, and children pairs are adjacent in a 64-byte line
+/// where they fit; the gathered leaf triangles copy the scene's vertices.
+TEST(KdTree, NodeLinesAndGatheredTrianglesMatchTheBuiltTree) {
+  const auto scene = make("soup:n=3000");
+  const KdTreeConfig config;
+  const KdTreeData data = build_kdtree(*scene, config);
+  const std::vector<KdNodeLine> lines = kd_node_lines(data.nodes);
+  const KdNode* packed = lines.front().node;
+  ASSERT_EQ(reinterpret_cast<std::uintptr_t>(packed) % 64, 0u);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> todo = {{0, 0}};  // build index, line index
+  std::size_t visited = 0;
+  while (!todo.empty()) {
+    const auto [b, l] = todo.back();
+    todo.pop_back();
+    ++visited;
+    const KdNode& n = data.nodes[b];
+    const KdNode& m = packed[l];
+    ASSERT_EQ(n.is_leaf(), m.is_leaf());
+    if (n.is_leaf()) {
+      EXPECT_EQ(n.first, m.first);
+      EXPECT_EQ(n.count(), m.count());
+      continue;
+    }
+    EXPECT_EQ(n.axis(), m.axis());
+    EXPECT_EQ(n.split, m.split);
+    EXPECT_EQ(m.above_child() % 2, 0u);
+    todo.push_back({b + 1, m.above_child()});
+    todo.push_back({n.above_child(), m.above_child() + 1});
+  }
+  EXPECT_EQ(visited, data.nodes.size());
+  EXPECT_LT(lines.size() * 8, 3 * data.nodes.size());
+  const auto tris = gather_leaf_triangles(*scene, data.prims);
+  ASSERT_EQ(tris.size(), data.prims.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    const auto& t = scene->mesh.triangles[data.prims[i]];
+    EXPECT_EQ(tris[i].prim, data.prims[i]);
+    EXPECT_TRUE(tris[i].v0 == scene->mesh.vertices[t[0]] && tris[i].v1 == scene->mesh.vertices[t[1]] &&
+                tris[i].v2 == scene->mesh.vertices[t[2]]);
+  }
+}
+
 TEST(KdTree, CostParametersShapeTheTree) {
   const auto scene = make("soup:n=2000");
   const KdTree cheap_trav(scene, config_for("c_trav=1,c_isect=80"));

@@ -39,11 +39,12 @@ class KdTree final : public AggregateBase<KdTree> {
  private:
   template <bool kAnyHit, class Counters>
   bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
-    const KdTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    const KdTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds,
+                          tris_.empty() ? nullptr : tris_.data(), lines_.empty() ? nullptr : lines_.front().node};
     using K = WatertightKernel;
     if (config_.traversal == KdTraversal::stack)
-      return config_.mailbox ? kd_traverse_stack<K, kAnyHit, true>(view, ray, hit, counters)
-                             : kd_traverse_stack<K, kAnyHit, false>(view, ray, hit, counters);
+      return config_.mailbox ? kd_traverse_lines<K, kAnyHit, true>(view, ray, hit, counters)
+                             : kd_traverse_lines<K, kAnyHit, false>(view, ray, hit, counters);
     return config_.mailbox ? kd_traverse_recursive<K, kAnyHit, true>(view, ray, hit, counters)
                            : kd_traverse_recursive<K, kAnyHit, false>(view, ray, hit, counters);
   }
@@ -51,6 +52,8 @@ class KdTree final : public AggregateBase<KdTree> {
   std::shared_ptr<const Scene> scene_;
   KdTreeConfig config_;
   KdTreeData data_;
+  std::vector<KdLeafTriangle> tris_;
+  std::vector<KdNodeLine> lines_;  ///< data_.nodes in cache lines, for the stack traversal  ///< data_.prims with their vertices (kdtree_leaf_triangles.h)
 };
 
 /// The factory entry: parameters, accuracy bound and oracle variants.

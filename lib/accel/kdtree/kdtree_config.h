@@ -20,7 +20,7 @@ enum class KdSweep {
 
 enum class KdTraversal {
   recursive,  ///< Kaplan/Arvo/Jansen recursive in-order traversal
-  stack,      ///< the same order with an explicit stack (Havran's thesis, TA_B^rec)
+  stack,      ///< the same order with an explicit stack (Havran's thesis, TA_B^rec), over nodes in cache lines
 };
 
 struct KdTreeConfig {

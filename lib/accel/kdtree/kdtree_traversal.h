@@ -9,16 +9,22 @@
 ///   t* < tmin:          only the far child, on [tmin, tmax];
 ///   tmin <= t* <= tmax: the near child on [tmin, t*], then the far child on [t*, tmax].
 /// Robustness: t* carries a relative error below 3 ulps, so the comparisons use t* widened by
-/// kKdPlaneSlack·|t*| on each side (a child is skipped only when the exact ray surely misses it),
-/// and a ray lying in a split plane (d[a] = 0, o[a] = s) visits one child, which suffices
-/// because every point of the plane lies in both closed children and placement is closed.
+/// kKdPlaneSlack·|t*| on each side (a child is skipped only when the exact ray surely misses it).
+/// A ray with d[a] = ±0 has inv[a] = ±inf and t* = ±inf: t* = +inf keeps it in the near child
+/// (its origin's side), t* = -inf in the far one. A ray lying in a split plane (d[a] = 0,
+/// o[a] = s) has t* = 0·inf = NaN: every comparison with NaN is false, so it visits both
+/// children on the whole interval (one would suffice, as every point of the plane lies in both
+/// closed children and placement is closed). No branch tests for NaN or infinity: the widening
+/// t*·(1 ∓ kKdPlaneSlack) maps ±inf to itself and NaN to NaN.
 /// A hit ends traversal only once it lies inside the current cell's interval: the far child is
 /// skipped when the closest hit so far is before the far child's entry.
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
+#include "accel/kdtree/kdtree_leaf_triangles.h"
 #include "accel/kdtree/kdtree_node.h"
+#include "accel/kdtree/kdtree_node_lines.h"
 #include "geometry/bounds.h"
 #include "scene/scene_primitives.h"
 
@@ -32,6 +38,10 @@ struct KdTreeView {
   const std::uint32_t* prims;
   const Scene* scene;
   Bounds3f bounds;
+  /// prims with their vertices gathered (kdtree_leaf_triangles.h), or null: read the scene.
+  const KdLeafTriangle* tris = nullptr;
+  /// The same nodes regrouped into cache lines (kdtree_node_lines.h), for kd_traverse_lines.
+  const KdNode* lines = nullptr;
 };
 
 /// A direct-mapped mailbox of the last primitives a ray tested (Amanatides and Woo 1987): a
@@ -68,12 +78,11 @@ struct KdPlaneCrossing {
 
 inline KdPlaneCrossing kd_cross(const KdNode& node, std::uint32_t index, const Ray& ray, const Vec3f& inv) {
   const int a = node.axis();
-  float t = (node.split - ray.org[a]) * inv[a];
-  if (std::isnan(t)) t = 0.0f;  // origin in the plane, direction (nearly) parallel to it
-  const float slack = std::isfinite(t) ? kKdPlaneSlack * std::abs(t) : 0.0f;
+  const float t = (node.split - ray.org[a]) * inv[a];  // NaN: the ray lies in the plane
+  const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
   const bool lower_first = inv[a] > 0.0f;  // inv = +inf for d = +0: the ray stays on its origin's side
   const std::uint32_t lower = index + 1, upper = node.above_child();
-  return {t - slack, t + slack, lower_first ? lower : upper, lower_first ? upper : lower};
+  return {w0 < w1 ? w0 : w1, w0 < w1 ? w1 : w0, lower_first ? lower : upper, lower_first ? upper : lower};
 }
 
 /// Tests the primitives of a leaf; returns true on a hit (any-hit queries stop there).
@@ -82,6 +91,28 @@ inline bool kd_test_leaf(const KdTreeView& tree, const KdNode& node, typename Ke
                          KdMailbox<kMailbox>& mailbox, Counters& counters) {
   counters.leaf();
   bool found = false;
+  if (tree.tris != nullptr) {
+    const KdLeafTriangle* tri = tree.tris + node.first;
+    for (std::uint32_t i = 0, n = node.count(); i < n; ++i) {
+      if (mailbox.seen(tri[i].prim)) {
+        counters.mailbox_skip();
+        continue;
+      }
+      counters.prim_test();
+      TriangleHit th;
+      if (Kernel::intersect(ctx, tri[i].prim, tri[i].v0, tri[i].v1, tri[i].v2, th)) {
+        counters.prim_hit();
+        hit.t = th.t;
+        hit.u = th.u;
+        hit.v = th.v;
+        hit.prim = tri[i].prim;
+        hit.instance = kInvalidId;
+        found = true;
+        if constexpr (kAnyHit) return true;
+      }
+    }
+    return found;
+  }
   const std::uint32_t* p = tree.prims + node.first;
   for (std::uint32_t i = 0, n = node.count(); i < n; ++i) {
     if (mailbox.seen(p[i])) {
@@ -123,11 +154,64 @@ bool kd_traverse_stack(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
       } else if (c.t_hi < tmin) {
         index = c.far;
       } else {
-        stack[top++] = {c.far, std::max(c.t_lo, tmin), tmax};
+        stack[top++] = {c.far, c.t_lo > tmin ? c.t_lo : tmin, tmax};  // NaN keeps the interval
         index = c.near;
-        tmax = std::min(c.t_hi, tmax);
+        tmax = c.t_hi < tmax ? c.t_hi : tmax;
       }
       node = &tree.nodes[index];
+    }
+    if (kd_test_leaf<Kernel, kAnyHit, kMailbox>(tree, *node, ctx, hit, mailbox, counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+    do {
+      if (top == 0) return found;
+      --top;
+    } while (Kernel::closest(ctx) < stack[top].tmin);  // the hit lies before that cell
+    index = stack[top].node;
+    tmin = stack[top].tmin;
+    tmax = stack[top].tmax;
+  }
+}
+
+/// kd_traverse_stack over the cache-line layout (tree.lines, kdtree_node_lines.h), where the
+/// children of a node are the pair c, c + 1: the near child is c + [d[a] < 0] without a branch.
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
+  const Vec3f inv = safe_inverse(ray.dir);
+  float tmin, tmax;
+  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  auto ctx = Kernel::prepare(ray);
+  KdMailbox<kMailbox> mailbox;
+  const float org[3] = {ray.org.x, ray.org.y, ray.org.z}, rcp[3] = {inv.x, inv.y, inv.z};
+  const std::uint32_t upper_first[3] = {inv.x > 0.0f ? 0u : 1u, inv.y > 0.0f ? 0u : 1u, inv.z > 0.0f ? 0u : 1u};
+  struct Entry {
+    std::uint32_t node;
+    float tmin, tmax;
+  };
+  Entry stack[72];
+  int top = 0;
+  bool found = false;
+  std::uint32_t index = 0;
+  for (;;) {
+    const KdNode* node = &tree.lines[index];
+    while (!node->is_leaf()) {
+      counters.node();
+      const int a = node->axis();
+      const float t = (node->split - org[a]) * rcp[a];  // NaN: the ray lies in the plane
+      const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
+      const float t_lo = w0 < w1 ? w0 : w1, t_hi = w0 < w1 ? w1 : w0;
+      const std::uint32_t near = node->above_child() + upper_first[a], far = near ^ 1u;
+      if (t_lo > std::min(tmax, Kernel::closest(ctx))) {
+        index = near;
+      } else if (t_hi < tmin) {
+        index = far;
+      } else {
+        stack[top++] = {far, t_lo > tmin ? t_lo : tmin, tmax};  // NaN keeps the interval
+        index = near;
+        tmax = t_hi < tmax ? t_hi : tmax;
+      }
+      node = &tree.lines[index];
     }
     if (kd_test_leaf<Kernel, kAnyHit, kMailbox>(tree, *node, ctx, hit, mailbox, counters)) {
       found = true;
@@ -167,8 +251,8 @@ struct KdRecursiveTraversal {
     const KdPlaneCrossing c = kd_cross(node, index, ray, inv);
     if (c.t_lo > std::min(tmax, Kernel::closest(ctx))) return visit(c.near, tmin, tmax);  // t* > tmax
     if (c.t_hi < tmin) return visit(c.far, tmin, tmax);                                  // t* < tmin
-    if (visit(c.near, tmin, std::min(c.t_hi, tmax))) return true;                         // tmin <= t* <= tmax
-    const float far_tmin = std::max(c.t_lo, tmin);
+    if (visit(c.near, tmin, c.t_hi < tmax ? c.t_hi : tmax)) return true;  // tmin <= t* <= tmax (NaN: both, whole)
+    const float far_tmin = c.t_lo > tmin ? c.t_lo : tmin;
     if (Kernel::closest(ctx) < far_tmin) return false;  // the hit lies inside the near cell
     return visit(c.far, far_tmin, tmax);
   }
