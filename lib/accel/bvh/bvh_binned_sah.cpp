@@ -54,7 +54,7 @@ class BinnedSahBuilder {
       mid = s.axis >= 0 ? bvh_partition_small(refs_ + begin, n, s, left, right)
                         : bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
     } else {
-      const BvhBinMapping map(bounds, config_.bins);
+      const BvhBinMapping map(bounds, bvh_object_bins(config_.bins, n));
       const BvhObjectSplit s = find_split(begin, n, map);
       const double half_area = bvh_half_area(box);
       const double split_cost = s.axis >= 0 && half_area > 0.0 ? bvh_split_cost(config_.cost, s.cost, half_area)
@@ -91,7 +91,7 @@ class BinnedSahBuilder {
   BvhObjectSplit find_split(std::size_t begin, std::size_t n, const BvhBinMapping& map) const {
     if (n < kParallelBinMin) {
       BvhObjectBins bins;
-      bins.reset(config_.bins);
+      bins.reset(map.bins);
       bins.add(refs_ + begin, n, map);
       return bvh_best_object_split(bins);
     }
@@ -100,7 +100,7 @@ class BinnedSahBuilder {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t c = r.begin(); c != r.end(); ++c) {
         const std::size_t lo = c * kBinChunk, hi = std::min(n, lo + kBinChunk);
-        bins[c].reset(config_.bins);
+        bins[c].reset(map.bins);
         bins[c].add(refs_ + begin + lo, hi - lo, map);
       }
     });

@@ -113,6 +113,12 @@ struct BvhBinMapping {
   }
 };
 
+/// Bins for a node of n references: config.bins, fewer for small nodes (4 + n/20, as Embree's
+/// binned builder), where the 3·bins sweep would cost more than binning the references.
+inline int bvh_object_bins(int config_bins, std::size_t n) {
+  return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(config_bins), 4 + n / 20));
+}
+
 /// Per-axis bin boxes and counts.
 struct BvhObjectBins {
   struct Bin {
@@ -236,9 +242,11 @@ inline std::size_t bvh_partition_object(BvhBuildRef* refs, std::size_t n, const 
   return i;
 }
 
-/// Nodes of at most this many references are split by a full sweep over sorted centroids
-/// instead of bins: exact SAH candidates, and cheaper than resetting and sweeping 3·bins bins.
-inline constexpr std::size_t kBvhSmallSweepMax = 12;
+/// Nodes of at most this many references (those that may become leaves at the default leaf
+/// size) are split by a full sweep over sorted centroids: exact candidates for the leaf-or-split
+/// decision. Larger thresholds measured slower (grass, 1M triangles: 0.46 s at 4, 0.52 s at 12)
+/// for a 0.7% lower SAH cost.
+inline constexpr std::size_t kBvhSmallSweepMax = 4;
 
 /// The best full-sweep SAH split of a small node (n <= kBvhSmallSweepMax): the first
 /// `left_count` references in centroid order on `axis` (ties by id) go left.

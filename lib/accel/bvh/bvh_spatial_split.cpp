@@ -64,7 +64,7 @@ class SpatialBuilder {
       n_left = bvh_partition_median(refs, n, centroid_axis, left, right);
       n_right = n - n_left;
     } else {
-      const BvhBinMapping map(bounds, config_.bins);
+      const BvhBinMapping map(bounds, bvh_object_bins(config_.bins, n));
       BvhObjectSplit object;
       BvhSweepSplit sweep;
       BvhRangeBounds small_left, small_right;
@@ -78,7 +78,7 @@ class SpatialBuilder {
         }
       } else {
         BvhObjectBins bins;
-        bins.reset(config_.bins);
+        bins.reset(map.bins);
         bins.add(refs, n, map);
         object = bvh_best_object_split(bins);
       }
