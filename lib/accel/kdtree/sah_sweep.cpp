@@ -23,13 +23,21 @@ void sweep_events(const std::vector<SplitEvent>& events, int axis, const Bounds3
   if (!(lo < hi)) return;
   const double sa = surface_area_d(box);
   if (!(sa > 0.0)) return;
+  // surface_area_d of the children with the split axis' extent substituted, term for term.
+  double d[3] = {double(box.hi.x) - box.lo.x, double(box.hi.y) - box.lo.y, double(box.hi.z) - box.lo.z};
+  auto area_with = [&](double extent) {
+    d[axis] = extent;
+    return 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+  };
   std::size_t left_before = 0;  // #{lo < p}
   std::size_t right_from = n;   // #{hi >= p}
-  for (std::size_t i = 0; i < events.size();) {
-    const float p = events[i].pos;
+  const SplitEvent* e = events.data();
+  const std::size_t m = events.size();
+  for (std::size_t i = 0; i < m;) {
+    const float p = e[i].pos;
     std::size_t ends = 0, planars = 0, starts = 0;
-    for (; i < events.size() && events[i].pos == p; ++i) {
-      switch (events[i].type) {
+    for (; i < m && e[i].pos == p; ++i) {
+      switch (e[i].type) {
         case SplitEvent::end: ++ends; break;
         case SplitEvent::planar: ++planars; break;
         case SplitEvent::start: ++starts; break;
@@ -38,10 +46,8 @@ void sweep_events(const std::vector<SplitEvent>& events, int axis, const Bounds3
     const std::size_t n_l = left_before + starts + planars;
     const std::size_t n_r = right_from;
     if (p > lo && p < hi) {
-      Bounds3f l = box, r = box;
-      l.hi[axis] = p;
-      r.lo[axis] = p;
-      const double c = cost.split(sa, surface_area_d(l), surface_area_d(r), n_l, n_r);
+      const double sa_l = area_with(double(p) - lo), sa_r = area_with(double(hi) - p);
+      const double c = cost.split(sa, sa_l, sa_r, n_l, n_r);
       if (c < best.cost) best = {axis, p, c};
     }
     left_before += starts + planars;
@@ -69,28 +75,47 @@ SplitCandidate find_split_sort(const std::vector<PrimRef>& refs, const Bounds3f&
 
 void split_events(const NodeEvents& parent, const std::vector<Side>& side, const std::vector<PrimRef>& left_straddlers,
                   const std::vector<PrimRef>& right_straddlers, NodeEvents& left, NodeEvents& right) {
-  std::vector<SplitEvent> new_l, new_r, only_l, only_r;
+  std::vector<SplitEvent> new_l, new_r;
+  std::vector<Side> event_side;  // side[e.prim] in event order: one random lookup per event
   for (int a = 0; a < 3; ++a) {
-    // One pass splices the events of one-sided primitives into both children, in order.
-    only_l.clear();
-    only_r.clear();
-    for (const SplitEvent& e : parent.axis[a]) {
-      const Side s = side[e.prim];
-      if (s == Side::left_only) only_l.push_back(e);
-      else if (s == Side::right_only) only_r.push_back(e);
-    }
     new_l.clear();
     new_r.clear();
     append_events(left_straddlers, a, new_l);
     append_events(right_straddlers, a, new_r);
     std::sort(new_l.begin(), new_l.end());
     std::sort(new_r.begin(), new_r.end());
-    left.axis[a].clear();
-    right.axis[a].clear();
-    left.axis[a].reserve(only_l.size() + new_l.size());
-    right.axis[a].reserve(only_r.size() + new_r.size());
-    std::merge(only_l.begin(), only_l.end(), new_l.begin(), new_l.end(), std::back_inserter(left.axis[a]));
-    std::merge(only_r.begin(), only_r.end(), new_r.begin(), new_r.end(), std::back_inserter(right.axis[a]));
+    const std::vector<SplitEvent>& in = parent.axis[a];
+    std::size_t n_l = new_l.size(), n_r = new_r.size();
+    event_side.resize(in.size());
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      const Side s = side[in[i].prim];
+      event_side[i] = s;
+      n_l += s == Side::left_only;
+      n_r += s == Side::right_only;
+    }
+    std::vector<SplitEvent>& out_l = left.axis[a];
+    std::vector<SplitEvent>& out_r = right.axis[a];
+    out_l.resize(n_l);
+    out_r.resize(n_r);
+    // One pass splices the events of one-sided primitives into both children, in order, merging
+    // the straddlers' new events in (as std::merge: at equal keys the parent's event first).
+    SplitEvent* pl = out_l.data();
+    SplitEvent* pr = out_r.data();
+    const SplitEvent *nl = new_l.data(), *nl_end = nl + new_l.size();
+    const SplitEvent *nr = new_r.data(), *nr_end = nr + new_r.size();
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      const SplitEvent& e = in[i];
+      const Side s = event_side[i];
+      if (s == Side::left_only) {
+        while (nl != nl_end && *nl < e) *pl++ = *nl++;
+        *pl++ = e;
+      } else if (s == Side::right_only) {
+        while (nr != nr_end && *nr < e) *pr++ = *nr++;
+        *pr++ = e;
+      }
+    }
+    pl = std::copy(nl, nl_end, pl);
+    pr = std::copy(nr, nr_end, pr);
   }
 }
 
