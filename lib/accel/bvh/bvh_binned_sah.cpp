@@ -15,11 +15,11 @@
 #include <tbb/task_arena.h>
 
 #include <memory>
-#include <thread>
 
 #include "accel/bvh/bvh_builders.h"
 #include "accel/bvh/bvh_object_binning.h"
 #include "accel/bvh/bvh_subtree.h"
+#include "accel/common/tracer.h"
 
 namespace raylab {
 namespace {
@@ -114,16 +114,12 @@ class BinnedSahBuilder {
 
 }  // namespace
 
-int bvh_build_threads(int threads) {
-  return threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
-
 Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
   const std::size_t n = boxes.size();
   if (n == 0) return Bvh2{};
   std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[n]);
   BvhSubtree root;
-  tbb::task_arena arena(bvh_build_threads(config.threads));
+  tbb::task_arena arena(resolve_thread_count(config.threads));
   arena.execute([&] {
     const BvhRangeBounds bounds = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, n, kBinChunk), BvhRangeBounds(),

@@ -20,7 +20,4 @@ Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& c
 /// unsplitting (bvh_spatial_split.cpp). `scene` must not be instanced.
 Bvh2 build_bvh_spatial(const Scene& scene, const BvhConfig& config);
 
-/// Build threads for config.threads (0: every hardware thread).
-int bvh_build_threads(int threads);
-
 }  // namespace raylab

@@ -28,6 +28,7 @@
 #include "accel/bvh/bvh_builders.h"
 #include "accel/bvh/bvh_object_binning.h"
 #include "accel/bvh/bvh_subtree.h"
+#include "accel/common/tracer.h"
 #include "geometry/triangle_clipping.h"
 
 namespace raylab {
@@ -427,7 +428,7 @@ Bvh2 build_bvh_spatial(const Scene& scene, const BvhConfig& config) {
     bounds.extend(refs[i]);
   }
   BvhSubtree root;
-  tbb::task_arena arena(bvh_build_threads(config.threads));
+  tbb::task_arena arena(resolve_thread_count(config.threads));
   arena.execute([&] {
     SpatialBuilder(scene, config, refs.get(), bvh_half_area(bounds.box())).build(root, 0, 0, n, capacity, bounds, 0);
   });
