@@ -165,8 +165,8 @@ TEST(KdTree, RaysInAndAlongSplitPlanesAgreeWithBruteForce) {
 
 /// The cache-line layout holds the same tree: walked in parallel with the build layout, every
 /// node has the same split or leaf range, and children pairs are adjacent in a 64-byte line
-/// where they fit; the gathered leaf triangles copy the scene's vertices.
-TEST(KdTree, NodeLinesAndGatheredTrianglesMatchTheBuiltTree) {
+/// where they fit; the triangle soup copies the scene's vertices.
+TEST(KdTree, NodeLinesAndTriangleSoupMatchTheBuiltTree) {
   const auto scene = make("soup:n=3000");
   const KdTreeConfig config;
   const KdTreeData data = build_kdtree(*scene, config);
@@ -195,14 +195,14 @@ TEST(KdTree, NodeLinesAndGatheredTrianglesMatchTheBuiltTree) {
   }
   EXPECT_EQ(visited, data.nodes.size());
   EXPECT_LT(lines.size() * 8, 3 * data.nodes.size());
-  const auto tris = gather_leaf_triangles(*scene, data.prims);
-  ASSERT_EQ(tris.size(), data.prims.size());
+  const auto tris = make_triangle_soup(*scene);
+  ASSERT_EQ(tris.size(), scene->mesh.size());
   for (std::size_t i = 0; i < tris.size(); ++i) {
-    const auto& t = scene->mesh.triangles[data.prims[i]];
-    EXPECT_EQ(tris[i].prim, data.prims[i]);
+    const auto& t = scene->mesh.triangles[i];
     EXPECT_TRUE(tris[i].v0 == scene->mesh.vertices[t[0]] && tris[i].v1 == scene->mesh.vertices[t[1]] &&
                 tris[i].v2 == scene->mesh.vertices[t[2]]);
   }
+  EXPECT_TRUE(make_triangle_soup(*make("sphereflake:depth=1")).empty());
 }
 
 TEST(KdTree, CostParametersShapeTheTree) {

@@ -7,12 +7,12 @@ KdTree::KdTree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config)
     : scene_(std::move(scene)),
       config_(config),
       data_(build_kdtree(*scene_, config_)),
-      tris_(gather_leaf_triangles(*scene_, data_.prims)),
+      tris_(make_triangle_soup(*scene_)),
       lines_(kd_node_lines(data_.nodes)) {}
 
 AccelStats KdTree::stats() const {
   return {data_.nodes.size() * sizeof(KdNode) + data_.prims.size() * sizeof(std::uint32_t) +
-              tris_.size() * sizeof(KdLeafTriangle) + lines_.size() * sizeof(KdNodeLine),
+              tris_.size() * sizeof(KdTriangle) + lines_.size() * sizeof(KdNodeLine),
           data_.nodes.size(),
           data_.sah_cost};
 }

@@ -52,8 +52,8 @@ class KdTree final : public AggregateBase<KdTree> {
   std::shared_ptr<const Scene> scene_;
   KdTreeConfig config_;
   KdTreeData data_;
-  std::vector<KdLeafTriangle> tris_;
-  std::vector<KdNodeLine> lines_;  ///< data_.nodes in cache lines, for the stack traversal  ///< data_.prims with their vertices (kdtree_leaf_triangles.h)
+  std::vector<KdTriangle> tris_;   ///< the triangles by primitive id (kdtree_triangle_soup.h)
+  std::vector<KdNodeLine> lines_;  ///< data_.nodes in cache lines, for the stack traversal
 };
 
 /// The factory entry: parameters, accuracy bound and oracle variants.

@@ -22,9 +22,9 @@
 #include <cstdint>
 #include <limits>
 
-#include "accel/kdtree/kdtree_leaf_triangles.h"
 #include "accel/kdtree/kdtree_node.h"
 #include "accel/kdtree/kdtree_node_lines.h"
+#include "accel/kdtree/kdtree_triangle_soup.h"
 #include "geometry/bounds.h"
 #include "scene/scene_primitives.h"
 
@@ -38,8 +38,8 @@ struct KdTreeView {
   const std::uint32_t* prims;
   const Scene* scene;
   Bounds3f bounds;
-  /// prims with their vertices gathered (kdtree_leaf_triangles.h), or null: read the scene.
-  const KdLeafTriangle* tris = nullptr;
+  /// The triangles by primitive id (kdtree_triangle_soup.h), or null: read the scene.
+  const KdTriangle* tris = nullptr;
   /// The same nodes regrouped into cache lines (kdtree_node_lines.h), for kd_traverse_lines.
   const KdNode* lines = nullptr;
 };
@@ -92,20 +92,22 @@ inline bool kd_test_leaf(const KdTreeView& tree, const KdNode& node, typename Ke
   counters.leaf();
   bool found = false;
   if (tree.tris != nullptr) {
-    const KdLeafTriangle* tri = tree.tris + node.first;
+    const std::uint32_t* p = tree.prims + node.first;
     for (std::uint32_t i = 0, n = node.count(); i < n; ++i) {
-      if (mailbox.seen(tri[i].prim)) {
+      const std::uint32_t prim = p[i];
+      if (mailbox.seen(prim)) {
         counters.mailbox_skip();
         continue;
       }
       counters.prim_test();
       TriangleHit th;
-      if (Kernel::intersect(ctx, tri[i].prim, tri[i].v0, tri[i].v1, tri[i].v2, th)) {
+      const KdTriangle& tri = tree.tris[prim];
+      if (Kernel::intersect(ctx, prim, tri.v0, tri.v1, tri.v2, th)) {
         counters.prim_hit();
         hit.t = th.t;
         hit.u = th.u;
         hit.v = th.v;
-        hit.prim = tri[i].prim;
+        hit.prim = prim;
         hit.instance = kInvalidId;
         found = true;
         if constexpr (kAnyHit) return true;
