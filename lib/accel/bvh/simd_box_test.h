@@ -49,7 +49,7 @@ struct WideBoxRay<N, true> {
 
   /// Bit i set when child i of `node` is hit on [tmin, tmax]; entry distances go to `entry`
   /// (32-byte aligned).
-  unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
+  [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
     const float (*bounds)[N] = node.bounds;
     if (finite_inverse) {
       // No component of the direction is zero: rounding is monotone, so lo <= hi gives
@@ -101,7 +101,7 @@ struct WideBoxRay<N, false> {
   }
 
   /// As the robust test; empty lanes (+inf, -inf) give near = +inf > far and miss.
-  unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
+  [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
     const float (*bounds)[N] = node.bounds;
     F t0 = F::broadcast(tmin), t1 = F::broadcast(tmax);
     for (int a = 0; a < 3; ++a) {
