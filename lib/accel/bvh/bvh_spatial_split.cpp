@@ -215,12 +215,12 @@ class SpatialBuilder {
     right.lo[axis] = std::max(right.lo[axis], pos);
   }
 
-  /// Binned spatial split (Stich et al. §4.2): spatial_bins() equal slabs of the node box per
+  /// Binned spatial split (Stich et al. §4.2): spatial_bins(n) equal slabs of the node box per
   /// axis, all three axes in one pass; a reference spanning several slabs is chopped into them
   /// (split_estimate). Candidates adding more than `budget` references are skipped.
   SpatialSplit find_spatial_split(const BvhBuildRef* refs, std::size_t n, const Bounds3f& box,
                                   std::size_t budget) const {
-    const int nb = spatial_bins();
+    const int nb = spatial_bins(n);
     struct Bin {
       __m128 lo, hi;
     };
@@ -400,9 +400,10 @@ class SpatialBuilder {
     return true;
   }
 
-  /// Half the object bins (at least 2): Embree's SBVH bins 32 object and 16 spatial slabs,
-  /// and chopping references costs one split per slab spanned.
-  int spatial_bins() const { return std::max(2, config_.bins / 2); }
+  /// Half the object bins (at least 2; Embree's SBVH bins 32 object and 16 spatial slabs), and
+  /// like the object bins (bvh_object_bins) fewer for small nodes: chopping a reference costs one
+  /// split per slab it spans, and the 3·bins sweep dominates small nodes.
+  int spatial_bins(std::size_t n) const { return std::max(2, bvh_object_bins(config_.bins, n) / 2); }
 
   const Scene& scene_;
   const BvhConfig& config_;
