@@ -38,8 +38,9 @@
 namespace raylab {
 
 /// The parameter t widened by its rounding error, downward and upward.
-inline float oct_t_below(float t) { return std::isfinite(t) ? t - kKdPlaneSlack * std::abs(t) : t; }
-inline float oct_t_above(float t) { return std::isfinite(t) ? t + kKdPlaneSlack * std::abs(t) : t; }
+/// (t·(1 ∓ kKdPlaneSlack) keeps ±inf; t is never NaN here.)
+inline float oct_t_below(float t) { return std::min(t * (1.0f - kKdPlaneSlack), t * (1.0f + kKdPlaneSlack)); }
+inline float oct_t_above(float t) { return std::max(t * (1.0f - kKdPlaneSlack), t * (1.0f + kKdPlaneSlack)); }
 
 /// The mirrored-frame walk over the leaves a ray crosses, front to back.
 ///
@@ -96,21 +97,24 @@ class OctreeRevellesWalk {
       if (s == 0) break;
     }
 
-    float enter[8], exit[8];
-    for (unsigned c = 0; c < 8; ++c) {
-      enter[c] = std::max(std::max(c & 1u ? tm[0] : t0[0], c & 2u ? tm[1] : t0[1]), c & 4u ? tm[2] : t0[2]);
-      exit[c] = std::min(std::min(c & 1u ? t1[0] : tm[0], c & 2u ? t1[1] : tm[1]), c & 4u ? t1[2] : tm[2]);
-    }
+    auto enter = [&](unsigned c) {
+      return std::max(std::max(c & 1u ? tm[0] : t0[0], c & 2u ? tm[1] : t0[1]), c & 4u ? tm[2] : t0[2]);
+    };
+    auto exit = [&](unsigned c) {
+      return std::min(std::min(c & 1u ? t1[0] : tm[0], c & 2u ? t1[1] : tm[1]), c & 4u ? t1[2] : tm[2]);
+    };
     unsigned done = 0;
     while (pending) {
-      unsigned c = 8;
-      for (unsigned p = pending; p; p &= p - 1) {
+      unsigned c = static_cast<unsigned>(__builtin_ctz(pending));
+      float c_enter = enter(c);
+      for (unsigned p = pending & (pending - 1); p; p &= p - 1) {
         const unsigned i = static_cast<unsigned>(__builtin_ctz(p));
-        if (c == 8 || enter[i] < enter[c]) c = i;
+        const float e = enter(i);
+        if (e < c_enter) c = i, c_enter = e;
       }
       pending &= ~(1u << c);
       done |= 1u << c;
-      const float in_lo = oct_t_below(enter[c]), out_hi = oct_t_above(exit[c]);
+      const float in_lo = oct_t_below(c_enter), out_hi = oct_t_above(exit(c));
       if (in_lo > std::min(tmax_, cut_())) break;  // this and every later child lies beyond
       // A child the widened ray misses is not visited, but its successors are: the exact ray may
       // pass from c through a cell edge or corner straight into c | bit a | bit b.
