@@ -1,6 +1,7 @@
 #include "accel/bvh/bvh_build.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -17,13 +18,6 @@ struct BuildRefs {
   std::vector<std::uint32_t> ids;
 };
 
-struct Split {
-  int axis = -1;
-  std::size_t mid = 0;  ///< ids[begin, mid) go left after partitioning
-  int bin = 0;          ///< binned: references in bins below `bin` go left
-  double cost = std::numeric_limits<double>::infinity();
-};
-
 Bounds3f bounds_of(const BuildRefs& r, std::size_t begin, std::size_t end, Bounds3f* centroid_bounds) {
   Bounds3f b, c;
   for (std::size_t i = begin; i < end; ++i) {
@@ -34,59 +28,10 @@ Bounds3f bounds_of(const BuildRefs& r, std::size_t begin, std::size_t end, Bound
   return b;
 }
 
-/// Binned SAH over the centroid bounds (Wald 2007): `bins` equal bins per axis.
-Split find_binned_split(const BuildRefs& r, std::size_t begin, std::size_t end, const Bounds3f& node,
-                        const Bounds3f& cb, const BvhConfig& config) {
-  Split best;
-  const int bins = config.bins;
-  const double node_area = surface_area_d(node);
-  if (!(node_area > 0.0)) return best;
-  for (int axis = 0; axis < 3; ++axis) {
-    const float lo = cb.lo[axis], extent = cb.hi[axis] - cb.lo[axis];
-    if (!(extent > 0.0f)) continue;
-    const float scale = static_cast<float>(bins) / extent;
-    std::vector<Bounds3f> bin_box(bins);
-    std::vector<std::size_t> bin_count(bins, 0);
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::uint32_t id = r.ids[i];
-      const int b = std::min(bins - 1, static_cast<int>((r.centroids[id][axis] - lo) * scale));
-      bin_box[b].extend(r.boxes[id]);
-      ++bin_count[b];
-    }
-    std::vector<double> right_area(bins, 0.0);
-    std::vector<std::size_t> right_count(bins, 0);
-    Bounds3f acc;
-    std::size_t n = 0;
-    for (int b = bins - 1; b > 0; --b) {
-      acc.extend(bin_box[b]);
-      n += bin_count[b];
-      right_area[b] = surface_area_d(acc);
-      right_count[b] = n;
-    }
-    acc = Bounds3f();
-    n = 0;
-    for (int b = 0; b + 1 < bins; ++b) {
-      acc.extend(bin_box[b]);
-      n += bin_count[b];
-      if (n == 0 || right_count[b + 1] == 0) continue;
-      const double cost = config.cost.c_trav + config.cost.c_isect *
-                                                   (surface_area_d(acc) * double(n) +
-                                                    right_area[b + 1] * double(right_count[b + 1])) /
-                                                   node_area;
-      if (cost < best.cost) {
-        best.cost = cost;
-        best.axis = axis;
-        best.mid = begin + n;
-        best.bin = b + 1;
-      }
-    }
-  }
-  return best;
-}
-
-class Builder {
+/// The lecture's midpoint and median splits along the centroid bounds' longest axis.
+class MidpointMedianBuilder {
  public:
-  Builder(const std::vector<Bounds3f>& boxes, const BvhConfig& config) : refs_{boxes, {}, {}}, config_(config) {
+  MidpointMedianBuilder(const std::vector<Bounds3f>& boxes, const BvhConfig& config) : refs_{boxes, {}, {}}, config_(config) {
     refs_.centroids.resize(boxes.size());
     for (std::size_t i = 0; i < boxes.size(); ++i)
       refs_.centroids[i] = boxes[i].empty() ? Vec3f(0.0f) : boxes[i].center();
@@ -139,28 +84,10 @@ class Builder {
         }
         break;
       }
-      case BvhBuilder::median:
+      default:  // median (the SAH builders live in bvh_*_sah.cpp and bvh_spatial_split.cpp)
         if (n <= static_cast<std::size_t>(config_.max_leaf_size)) return make_leaf(node, begin, end);
         std::nth_element(first, first + n / 2, last, by_axis(axis));
         break;
-      default: {
-        const Split s = find_binned_split(refs_, begin, end, nodes_[node].box, cb, config_);
-        const double leaf_cost = config_.cost.c_isect * static_cast<double>(n);
-        if (n <= static_cast<std::size_t>(config_.max_leaf_size) && !(s.cost < leaf_cost))
-          return make_leaf(node, begin, end);
-        if (s.axis < 0) {
-          std::nth_element(first, first + n / 2, last, by_axis(axis));
-          break;
-        }
-        const float lo = cb.lo[s.axis];
-        const float scale = static_cast<float>(config_.bins) / (cb.hi[s.axis] - lo);
-        const int split_bin = s.bin;
-        auto* it = std::partition(first, last, [&](std::uint32_t id) {
-          return std::min(config_.bins - 1, static_cast<int>((refs_.centroids[id][s.axis] - lo) * scale)) < split_bin;
-        });
-        mid = static_cast<std::size_t>(it - refs_.ids.data());
-        break;
-      }
     }
     const auto left = static_cast<std::uint32_t>(nodes_.size());
     nodes_.emplace_back();
@@ -183,7 +110,7 @@ Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& c
     throw std::length_error("build_bvh_over_boxes: more than 2^32 - 1 boxes");
   switch (config.builder) {
     case BvhBuilder::midpoint:
-    case BvhBuilder::median: return Builder(boxes, config).build();
+    case BvhBuilder::median: return MidpointMedianBuilder(boxes, config).build();
     case BvhBuilder::sweep: return build_bvh_sweep_sah(boxes, config);
     case BvhBuilder::binned:
     case BvhBuilder::spatial: break;
