@@ -341,5 +341,32 @@ TEST(WideBvh, AnyHitAgreesWithClosestHitAndWidthsAgreeOnT) {
   }
 }
 
+// A ray parallel to a box face (direction component +0 or -0) whose origin lies on that face
+// touches the closed box: both zeros must keep the slab, in the scalar and the SIMD test.
+TEST(WideBvh, ZeroDirectionComponentOfEitherSignKeepsARayOnTheFace) {
+  const Bounds3f box({0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f});
+  for (const float zero : {0.0f, -0.0f})
+    for (const float face : {0.0f, 1.0f}) {
+      const Ray ray{{-1.0f, face, 0.5f}, {1.0f, zero, 0.0f}, 0.0f, 10.0f};
+      float t0, t1;
+      EXPECT_TRUE(intersect_box(box, ray, safe_inverse(ray.dir), ray.tmin, ray.tmax, t0, t1))
+          << "zero " << (std::signbit(zero) ? "-0" : "+0") << ", face y = " << face;
+      EXPECT_EQ(t0, 1.0f);
+      WideBvhNode<8> node = {};
+      for (int a = 0; a < 3; ++a) {
+        node.bounds[a][0] = 0.0f;
+        node.bounds[3 + a][0] = 1.0f;
+        for (int i = 1; i < 8; ++i) {
+          node.bounds[a][i] = std::numeric_limits<float>::infinity();
+          node.bounds[3 + a][i] = -std::numeric_limits<float>::infinity();
+        }
+      }
+      node.used = 1;
+      alignas(32) float entry[8];
+      const unsigned mask = WideBoxRay<8, true>(ray).hit(node, ray.tmax, entry);
+      EXPECT_EQ(mask & 1u, 1u) << "SIMD, zero " << (std::signbit(zero) ? "-0" : "+0") << ", face y = " << face;
+    }
+}
+
 }  // namespace
 }  // namespace raylab

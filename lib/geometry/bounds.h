@@ -68,8 +68,11 @@ inline bool intersect_box(const Bounds3f& b, const Ray& ray, const Vec3f& inv_di
   return true;
 }
 
+/// 1/d per component, with +inf for both +0 and -0: a ray parallel to a slab then keeps the
+/// slab's interval exactly when its origin lies in the closed slab (a -inf inverse would turn an
+/// origin on the slab's face into an empty interval).
 inline Vec3f safe_inverse(const Vec3f& d) {
-  auto inv = [](float x) { return x != 0.0f ? 1.0f / x : std::copysign(std::numeric_limits<float>::infinity(), x); };
+  auto inv = [](float x) { return x != 0.0f ? 1.0f / x : std::numeric_limits<float>::infinity(); };
   return {inv(d.x), inv(d.y), inv(d.z)};
 }
 

@@ -95,7 +95,7 @@ AccelKind make_bvh_kind() {
                     "vertices (bound: 50% of edge/vertex-aimed rays on closed meshes, 90% on open ones, 0.1% of "
                     "others)"};
           },
-          {"width=2", "width=4", "width=8", "robust=off", "width=2,robust=off", "width=4,robust=off",
+          {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
            "builder=sweep"}};
 }

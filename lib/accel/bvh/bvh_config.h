@@ -26,7 +26,8 @@ struct BvhConfig {
   int width = 2;
   /// The builder makes a leaf of at most this many primitives (SAH may stop earlier).
   int max_leaf_size = 4;
-  /// SAH bins per axis (binned and spatial builders).
+  /// The most SAH bins per axis (binned and spatial builders): small nodes use fewer (4 + n/20,
+  /// as Embree), and spatial splits use half as many.
   int bins = 32;
   BvhSahCost cost;
   /// SBVH: a spatial split is tried only where the object split's child overlap exceeds

@@ -34,9 +34,10 @@ struct WideBoxRay<N, true> {
   float tmin;
 
   explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
-    // safe_inverse as one division: IEEE 1/±0 is ±inf, as safe_inverse's copysign.
+    // safe_inverse as one division: d + 0 turns -0 into +0, and IEEE 1/+0 is +inf.
     alignas(16) float i[4];
-    _mm_store_ps(i, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(r.dir.x, r.dir.y, r.dir.z, 1.0f)));
+    const __m128 d = _mm_add_ps(_mm_setr_ps(r.dir.x, r.dir.y, r.dir.z, 1.0f), _mm_setzero_ps());
+    _mm_store_ps(i, _mm_div_ps(_mm_set1_ps(1.0f), d));
     finite_inverse = true;
     for (int a = 0; a < 3; ++a) {
       org[a] = F::broadcast(r.org[a]);

@@ -10,8 +10,8 @@
 ///   tmin <= t* <= tmax: the near child on [tmin, t*], then the far child on [t*, tmax].
 /// Robustness: t* carries a relative error below 3 ulps, so the comparisons use t* widened by
 /// kKdPlaneSlack·|t*| on each side (a child is skipped only when the exact ray surely misses it).
-/// A ray with d[a] = ±0 has inv[a] = ±inf and t* = ±inf: t* = +inf keeps it in the near child
-/// (its origin's side), t* = -inf in the far one. A ray lying in a split plane (d[a] = 0,
+/// A ray with d[a] = ±0 has inv[a] = +inf (safe_inverse) and t* = ±inf by its origin's side:
+/// t* = +inf keeps it in the near (lower) child, t* = -inf in the far (upper) one. A ray lying in a split plane (d[a] = 0,
 /// o[a] = s) has t* = 0·inf = NaN: every comparison with NaN is false, so it visits both
 /// children on the whole interval (one would suffice, as every point of the plane lies in both
 /// closed children and placement is closed). No branch tests for NaN or infinity: the widening
@@ -80,7 +80,7 @@ inline KdPlaneCrossing kd_cross(const KdNode& node, std::uint32_t index, const R
   const int a = node.axis();
   const float t = (node.split - ray.org[a]) * inv[a];  // NaN: the ray lies in the plane
   const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
-  const bool lower_first = inv[a] > 0.0f;  // inv = +inf for d = +0: the ray stays on its origin's side
+  const bool lower_first = inv[a] > 0.0f;  // inv = +inf for d = ±0: t* = ±inf keeps the origin's side
   const std::uint32_t lower = index + 1, upper = node.above_child();
   return {w0 < w1 ? w0 : w1, w0 < w1 ? w1 : w0, lower_first ? lower : upper, lower_first ? upper : lower};
 }
