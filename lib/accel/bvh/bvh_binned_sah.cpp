@@ -1,6 +1,6 @@
 /// Binned SAH builder (Wald, "On fast construction of SAH-based bounding volume hierarchies",
 /// 2007), parallel with TBB: large nodes bin in parallel chunks, and both children of a node of
-/// at least kTaskMin references are built as separate tasks into their own subtrees
+/// at least kBvhTaskMinReferences references are built as separate tasks into their own subtrees
 /// (bvh_subtree.h). Which nodes become tasks depends only on reference counts, and bins merge
 /// exactly (min/max, integer sums), so the tree is the same with any thread count.
 ///
@@ -10,7 +10,6 @@
 /// trees of logarithmic depth; no heap allocation per node below kParallelBinMin references.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
@@ -24,7 +23,6 @@
 namespace raylab {
 namespace {
 
-constexpr std::size_t kTaskMin = 4096;           ///< children of nodes this large are tasks
 constexpr std::size_t kParallelBinMin = 1 << 16;  ///< nodes this large bin in parallel
 constexpr std::size_t kBinChunk = 1 << 15;
 
@@ -65,21 +63,10 @@ class BinnedSahBuilder {
                         : bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
       if (mid == 0 || mid == n) mid = bvh_partition_median(refs_ + begin, n, -1, left, right);
     }
-    const auto child = static_cast<std::uint32_t>(out.nodes.size());
-    out.nodes.resize(out.nodes.size() + 2);
-    out.nodes[slot].first = child;
-    out.nodes[slot].count = 0;
-    if (n >= kTaskMin) {
-      auto l = std::make_unique<BvhSubtree>(), r = std::make_unique<BvhSubtree>();
-      BvhSubtree &lt = *l, &rt = *r;
-      out.grafts.emplace_back(child, std::move(l));
-      out.grafts.emplace_back(child + 1, std::move(r));
-      tbb::parallel_invoke([&] { build(lt, 0, begin, mid, left, depth + 1); },
-                           [&] { build(rt, 0, begin + mid, n - mid, right, depth + 1); });
-    } else {
-      build(out, child, begin, mid, left, depth + 1);
-      build(out, child + 1, begin + mid, n - mid, right, depth + 1);
-    }
+    bvh_split_node(out, slot, n, [&](BvhSubtree& sub, std::uint32_t child, int side) {
+      if (side == 0) build(sub, child, begin, mid, left, depth + 1);
+      else build(sub, child, begin + mid, n - mid, right, depth + 1);
+    });
   }
 
  private:

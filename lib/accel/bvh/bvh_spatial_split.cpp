@@ -18,7 +18,6 @@
 /// most (1 + max_duplication)·N references. Spatial splits stop in a subtree once its capacity
 /// is used. The split depends only on the node's references, so the tree is the same with any
 /// number of build threads.
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include <cstring>
@@ -34,7 +33,6 @@
 namespace raylab {
 namespace {
 
-constexpr std::size_t kTaskMin = 4096;  ///< children of nodes this large are tasks
 
 struct SpatialSplit {
   int axis = -1;
@@ -115,21 +113,10 @@ class SpatialBuilder {
     const std::size_t cap_right = capacity - cap_left;
     if (cap_left != n_left) std::memmove(refs + cap_left, refs + n_left, n_right * sizeof(BvhBuildRef));
 
-    const auto child = static_cast<std::uint32_t>(out.nodes.size());
-    out.nodes.resize(out.nodes.size() + 2);
-    out.nodes[slot].first = child;
-    out.nodes[slot].count = 0;
-    if (n >= kTaskMin) {
-      auto l = std::make_unique<BvhSubtree>(), r = std::make_unique<BvhSubtree>();
-      BvhSubtree &lt = *l, &rt = *r;
-      out.grafts.emplace_back(child, std::move(l));
-      out.grafts.emplace_back(child + 1, std::move(r));
-      tbb::parallel_invoke([&] { build(lt, 0, begin, n_left, cap_left, left, depth + 1); },
-                           [&] { build(rt, 0, begin + cap_left, n_right, cap_right, right, depth + 1); });
-    } else {
-      build(out, child, begin, n_left, cap_left, left, depth + 1);
-      build(out, child + 1, begin + cap_left, n_right, cap_right, right, depth + 1);
-    }
+    bvh_split_node(out, slot, n, [&](BvhSubtree& sub, std::uint32_t child, int side) {
+      if (side == 0) build(sub, child, begin, n_left, cap_left, left, depth + 1);
+      else build(sub, child, begin + cap_left, n_right, cap_right, right, depth + 1);
+    });
   }
 
  private:

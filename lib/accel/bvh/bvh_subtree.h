@@ -2,6 +2,8 @@
 /// Subtrees built apart (by parallel tasks) and concatenated into one Bvh2 in a fixed order, so
 /// that node numbering does not depend on scheduling: the task decomposition depends only on
 /// the references, and each task appends to its own node array.
+#include <tbb/parallel_invoke.h>
+
 #include <cstdint>
 #include <memory>
 #include <utility>
@@ -20,6 +22,31 @@ struct BvhSubtree {
 
   BvhSubtree() : nodes(1) {}
 };
+
+/// Children of nodes with at least this many references are built as separate tasks.
+inline constexpr std::size_t kBvhTaskMinReferences = 4096;
+
+/// Turns out.nodes[slot] into an interior node with two new children and builds them:
+/// build(subtree, child_slot, side) with side 0 (left) or 1 (right). A node of at least
+/// kBvhTaskMinReferences references builds its children as parallel tasks, each into its own
+/// grafted subtree (child_slot 0); a smaller one builds them in place, left first.
+template <class BuildChild>
+void bvh_split_node(BvhSubtree& out, std::uint32_t slot, std::size_t references, BuildChild&& build) {
+  const auto child = static_cast<std::uint32_t>(out.nodes.size());
+  out.nodes.resize(out.nodes.size() + 2);
+  out.nodes[slot].first = child;
+  out.nodes[slot].count = 0;
+  if (references >= kBvhTaskMinReferences) {
+    auto l = std::make_unique<BvhSubtree>(), r = std::make_unique<BvhSubtree>();
+    BvhSubtree &lt = *l, &rt = *r;
+    out.grafts.emplace_back(child, std::move(l));
+    out.grafts.emplace_back(child + 1, std::move(r));
+    tbb::parallel_invoke([&] { build(lt, 0u, 0); }, [&] { build(rt, 0u, 1); });
+  } else {
+    build(out, child, 0);
+    build(out, child + 1, 1);
+  }
+}
 
 /// Places `root` and its grafts depth first into one node array, then gathers each leaf's
 /// references into `prims` in node order: a leaf [first, first + count) of the builder's

@@ -129,55 +129,10 @@ inline bool kd_test_leaf(const KdTreeView& tree, const KdNode& node, typename Ke
   return found;
 }
 
-/// Iterative traversal. For kAnyHit, returns at the first hit (the caller passes a ray whose
-/// tmax is already closed).
-template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
-bool kd_traverse_stack(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
-  const Vec3f inv = safe_inverse(ray.dir);
-  float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
-  auto ctx = Kernel::prepare(ray);
-  KdMailbox<kMailbox> mailbox;
-  struct Entry {
-    std::uint32_t node;
-    float tmin, tmax;
-  };
-  Entry stack[72];
-  int top = 0;
-  bool found = false;
-  std::uint32_t index = 0;
-  for (;;) {
-    const KdNode* node = &tree.nodes[index];
-    while (!node->is_leaf()) {
-      counters.node();
-      const KdPlaneCrossing c = kd_cross(*node, index, ray, inv);
-      if (c.t_lo > std::min(tmax, Kernel::closest(ctx))) {
-        index = c.near;
-      } else if (c.t_hi < tmin) {
-        index = c.far;
-      } else {
-        stack[top++] = {c.far, c.t_lo > tmin ? c.t_lo : tmin, tmax};  // NaN keeps the interval
-        index = c.near;
-        tmax = c.t_hi < tmax ? c.t_hi : tmax;
-      }
-      node = &tree.nodes[index];
-    }
-    if (kd_test_leaf<Kernel, kAnyHit, kMailbox>(tree, *node, ctx, hit, mailbox, counters)) {
-      found = true;
-      if constexpr (kAnyHit) return true;
-    }
-    do {
-      if (top == 0) return found;
-      --top;
-    } while (Kernel::closest(ctx) < stack[top].tmin);  // the hit lies before that cell
-    index = stack[top].node;
-    tmin = stack[top].tmin;
-    tmax = stack[top].tmax;
-  }
-}
-
-/// kd_traverse_stack over the cache-line layout (tree.lines, kdtree_node_lines.h), where the
-/// children of a node are the pair c, c + 1: the near child is c + [d[a] < 0] without a branch.
+/// Iterative traversal (Havran's TA_B^rec with an explicit stack) over the cache-line layout
+/// (tree.lines, kdtree_node_lines.h), where the children of a node are the pair c, c + 1: the
+/// near child is c + [inv[a] < 0] without a branch. For kAnyHit, returns at the first hit (the
+/// caller passes a ray whose tmax is already closed).
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);

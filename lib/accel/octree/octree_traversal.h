@@ -24,6 +24,27 @@ struct OctreeView {
   Bounds3f bounds;
 };
 
+/// Tests the primitives of a leaf, skipping those the mailbox has seen; true on a hit (an
+/// any-hit query stops at the first).
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+inline bool octree_test_leaf(const OctreeView& tree, const OctNode& node, typename Kernel::Context& ctx, Hit& hit,
+                             KdMailbox<kMailbox>& mailbox, Counters& counters) {
+  counters.leaf();
+  bool found = false;
+  const std::uint32_t* p = tree.prims + node.first;
+  for (std::uint32_t i = 0; i < node.count; ++i) {
+    if (mailbox.seen(p[i])) {
+      counters.mailbox_skip();
+      continue;
+    }
+    if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+  }
+  return found;
+}
+
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
@@ -50,17 +71,9 @@ bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counte
       const OctNode& node = tree.nodes[e.node];
       if (e.level == 0) {
         if (node.is_leaf()) {
-          counters.leaf();
-          const std::uint32_t* p = tree.prims + node.first;
-          for (std::uint32_t i = 0; i < node.count; ++i) {
-            if (mailbox.seen(p[i])) {
-              counters.mailbox_skip();
-              continue;
-            }
-            if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
-              found = true;
-              if constexpr (kAnyHit) return true;
-            }
+          if (octree_test_leaf<Kernel, kAnyHit>(tree, node, ctx, hit, mailbox, counters)) {
+            found = true;
+            if constexpr (kAnyHit) return true;
           }
           break;
         }
@@ -99,20 +112,9 @@ bool octree_traverse_revelles(const OctreeView& tree, const Ray& ray, Hit& hit, 
   KdMailbox<kMailbox> mailbox;
   bool found = false;
   auto leaf = [&](std::uint32_t index, const Bounds3f&, float, float) {
-    const OctNode& node = tree.nodes[index];
-    counters.leaf();
-    const std::uint32_t* p = tree.prims + node.first;
-    for (std::uint32_t i = 0; i < node.count; ++i) {
-      if (mailbox.seen(p[i])) {
-        counters.mailbox_skip();
-        continue;
-      }
-      if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
-        found = true;
-        if constexpr (kAnyHit) return true;
-      }
-    }
-    return false;
+    const bool in_leaf = octree_test_leaf<Kernel, kAnyHit>(tree, tree.nodes[index], ctx, hit, mailbox, counters);
+    found = found || in_leaf;
+    return kAnyHit && in_leaf;
   };
   auto cut = [&] { return Kernel::closest(ctx); };
   octree_walk_revelles(tree.nodes, tree.bounds, ray, leaf, cut, counters);
