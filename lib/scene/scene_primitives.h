@@ -6,6 +6,15 @@
 
 namespace raylab {
 
+/// Writes a kernel's hit on primitive `prim` of a scene (not an instance) into `hit`.
+inline void set_scene_hit(Hit& hit, const TriangleHit& th, unsigned prim) {
+  hit.t = th.t;
+  hit.u = th.u;
+  hit.v = th.v;
+  hit.prim = prim;
+  hit.instance = kInvalidId;
+}
+
 /// Offers primitive `prim` to the kernel context; on a hit closer than the context's current
 /// closest, writes `hit` (t, u, v, prim; instance cleared) and returns true.
 template <class Kernel, class Counters>
@@ -23,11 +32,7 @@ inline bool intersect_scene_primitive(const Scene& scene, unsigned prim, typenam
   }
   if (!found) return false;
   counters.prim_hit();
-  hit.t = th.t;
-  hit.u = th.u;
-  hit.v = th.v;
-  hit.prim = prim;
-  hit.instance = kInvalidId;
+  set_scene_hit(hit, th, prim);
   return true;
 }
 

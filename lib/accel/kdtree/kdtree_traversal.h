@@ -85,6 +85,26 @@ inline KdPlaneCrossing kd_cross(const KdNode& node, std::uint32_t index, const R
   return {w0 < w1 ? w0 : w1, w0 < w1 ? w1 : w0, lower_first ? lower : upper, lower_first ? upper : lower};
 }
 
+/// Tests primitives prims[0, n) of `scene`, skipping those the mailbox has seen; true on a hit
+/// (an any-hit query stops at the first).
+template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
+inline bool kd_test_primitives(const Scene& scene, const std::uint32_t* prims, std::uint32_t n,
+                               typename Kernel::Context& ctx, Hit& hit, KdMailbox<kMailbox>& mailbox,
+                               Counters& counters) {
+  bool found = false;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (mailbox.seen(prims[i])) {
+      counters.mailbox_skip();
+      continue;
+    }
+    if (intersect_scene_primitive<Kernel>(scene, prims[i], ctx, hit, counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+  }
+  return found;
+}
+
 /// Tests the primitives of a leaf; returns true on a hit (any-hit queries stop there).
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 inline bool kd_test_leaf(const KdTreeView& tree, const KdNode& node, typename Kernel::Context& ctx, Hit& hit,
@@ -104,29 +124,15 @@ inline bool kd_test_leaf(const KdTreeView& tree, const KdNode& node, typename Ke
       const KdTriangle& tri = tree.tris[prim];
       if (Kernel::intersect(ctx, prim, tri.v0, tri.v1, tri.v2, th)) {
         counters.prim_hit();
-        hit.t = th.t;
-        hit.u = th.u;
-        hit.v = th.v;
-        hit.prim = prim;
-        hit.instance = kInvalidId;
+        set_scene_hit(hit, th, prim);
         found = true;
         if constexpr (kAnyHit) return true;
       }
     }
     return found;
   }
-  const std::uint32_t* p = tree.prims + node.first;
-  for (std::uint32_t i = 0, n = node.count(); i < n; ++i) {
-    if (mailbox.seen(p[i])) {
-      counters.mailbox_skip();
-      continue;
-    }
-    if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
-      found = true;
-      if constexpr (kAnyHit) return true;
-    }
-  }
-  return found;
+  return kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node.first, node.count(), ctx, hit, mailbox,
+                                             counters);
 }
 
 /// Iterative traversal (Havran's TA_B^rec with an explicit stack) over the cache-line layout

@@ -24,25 +24,13 @@ struct OctreeView {
   Bounds3f bounds;
 };
 
-/// Tests the primitives of a leaf, skipping those the mailbox has seen; true on a hit (an
-/// any-hit query stops at the first).
+/// Tests the primitives of a leaf (kd_test_primitives); true on a hit.
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 inline bool octree_test_leaf(const OctreeView& tree, const OctNode& node, typename Kernel::Context& ctx, Hit& hit,
                              KdMailbox<kMailbox>& mailbox, Counters& counters) {
   counters.leaf();
-  bool found = false;
-  const std::uint32_t* p = tree.prims + node.first;
-  for (std::uint32_t i = 0; i < node.count; ++i) {
-    if (mailbox.seen(p[i])) {
-      counters.mailbox_skip();
-      continue;
-    }
-    if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
-      found = true;
-      if constexpr (kAnyHit) return true;
-    }
-  }
-  return found;
+  return kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node.first, node.count, ctx, hit, mailbox,
+                                             counters);
 }
 
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
