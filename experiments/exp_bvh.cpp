@@ -189,28 +189,55 @@ std::string bvh_versus_kdtree(Runner& run, const Options& opt) {
         "same kernel), so both count one test per ray-triangle pair. *hit rate* is tests that found a closer hit "
         "over all tests (pbrt's Ray/Tri hits).\n\n";
   md += "| scene | rays | structure | trace s | build s | traversal share | triangle share | tests/ray | total tests | "
-        "hit rate | nodes/ray | Embree trace s |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "hit rate | rays that hit | leaves/ray | nodes/ray | Embree trace s |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> scenes = {"cgal:armadillo", "stadium:object=(sphere:n=800),ratio=50"};
   if (opt.full()) scenes.push_back("subdivided:of=cgal:armadillo,levels=2");
   const std::string rays = opt.full() ? "diffuse:262144" : "diffuse:65536";
   double kd_tests = 0, bvh_tests = 0;
+  std::map<std::string, std::vector<double>> traversal_share, leaves, ray_hits;
+  std::vector<double> test_ns;
   for (const auto& s : scenes) {
     const double tri_ns = ns_per_triangle_test(*run.scene(s), run.rays(s, rays));
+    test_ns.push_back(tri_ns);
     for (const std::string a : {"kdtree", "bvh:width=2"}) {
       progress("bvh: table " + s + " " + a);
       auto [accel, build_s] = build(a, run.scene(s), 0);
       const Trace t = run.trace(*accel, s, rays, 1);
       const auto [tri, trav] = run.row("table", s, rays, a, a, 1, build_s, *accel, t, tri_ns);
       const double n = static_cast<double>(run.rays(s, rays).size());
-      md += fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.1f}% | {:.1f}% | {:.1f} | {:.3g} | {:.1f}% | {:.1f} | {:.3f} |\n",
-                        s, rays, a, t.ns * n * 1e-9, build_s, 100 * trav, 100 * tri, t.tests, t.tests * n,
-                        100 * t.hits_per_test, t.nodes, t.embree_ns * n * 1e-9);
+      md += fmt::format(
+          "| {} | {} | {} | {:.3f} | {:.3f} | {:.1f}% | {:.1f}% | {:.1f} | {:.3g} | {:.1f}% | {:.1f}% | {:.1f} | {:.1f} | "
+          "{:.3f} |\n",
+          s, rays, a, t.ns * n * 1e-9, build_s, 100 * trav, 100 * tri, t.tests, t.tests * n, 100 * t.hits_per_test,
+          100 * t.hit_rate, t.leaves, t.nodes, t.embree_ns * n * 1e-9);
+      traversal_share[a].push_back(trav);
+      leaves[a].push_back(t.leaves);
+      ray_hits[a].push_back(t.hit_rate);
       (a == std::string("kdtree") ? kd_tests : bvh_tests) += t.tests * n;
     }
   }
-  md += fmt::format("\nSummed over these scenes the kd-tree made {:.2f}× the BVH's ray/triangle tests (pbrt: "
-                    "107.4B / 22.6B = 4.75×).\n\n",
-                    bvh_tests > 0 ? kd_tests / bvh_tests : 0.0);
+  const auto mean = [](const std::vector<double>& v) {
+    double sum = 0;
+    for (double x : v) sum += x;
+    return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
+  };
+  md += fmt::format(
+      "\nSummed over these scenes the kd-tree made {:.2f}× the BVH's ray/triangle tests (pbrt: 107.4B / 22.6B = "
+      "4.75×). The difference has the lecture's cause: a kd-tree references a triangle in every leaf it meets (exact "
+      "clipping trims the references but cannot remove them), and without a mailbox a ray retests it in each leaf it "
+      "crosses (here {:.1f} leaves per ray against the BVH's {:.1f}); the BVH references each triangle once. "
+      "Traversal is {:.0f}% (kd-tree) and {:.0f}% (BVH) of our trace time against pbrt's 7775 / (7775 + 6279) = 55% "
+      "and 6155 / (6155 + 2178) = 74%: {} (one watertight test costs us {:.1f} ns, measured cache-warm). Our hit rates per test are lower than "
+      "pbrt's because our diffuse rays leave a single object and only {:.0f}% of them hit anything, while in pbrt's "
+      "enclosed scene nearly every ray hits.\n\n",
+      bvh_tests > 0 ? kd_tests / bvh_tests : 0.0, mean(leaves["kdtree"]), mean(leaves["bvh:width=2"]),
+      100 * mean(traversal_share["kdtree"]), 100 * mean(traversal_share["bvh:width=2"]),
+      mean(traversal_share["bvh:width=2"]) > mean(traversal_share["kdtree"])
+          ? "as in pbrt, the BVH moves time from triangle tests to traversal"
+          : "unlike pbrt, the BVH does not spend the larger share traversing",
+      mean(test_ns),
+      100 * mean(ray_hits["bvh:width=2"]));
   return md;
 }
 
@@ -249,10 +276,22 @@ std::string rotated_walls(Runner& run, const Options& opt) {
   }
   const auto& b = by_accel["bvh"];
   const auto& sb = by_accel["bvh:builder=spatial"];
+  const auto& kd = by_accel["kdtree"];
   const double lost = b.back().second.ns - b.front().second.ns;
+  md += fmt::format(
+      "\nRotated, a wall's bounding box is mostly empty, so the object-split BVH's boxes overlap and tests per ray "
+      "grow from {:.1f} to {:.1f}: the lecture's slowdown, smaller here ({:.2f}×) than pbrt's 4.19× on its own "
+      "scene and rays.",
+      b.front().second.tests, b.back().second.tests, b.back().second.ns / b.front().second.ns);
   if (lost > 0)
-    md += fmt::format("\nOf the binned-SAH BVH's extra time at 45° ({:.0f} ns/ray), SBVH recovers {:.0f}%.\n",
-                      lost, 100.0 * (b.back().second.ns - sb.back().second.ns) / lost);
+    md += fmt::format(" SBVH's spatial splits refine the boxes (the lecture's work-around): {:.1f} tests per ray at "
+                      "45°, recovering {:.0f}% of the binned BVH's extra {:.0f} ns/ray.",
+                      sb.back().second.tests, 100.0 * (b.back().second.ns - sb.back().second.ns) / lost, lost);
+  md += fmt::format(
+      " The kd-tree with exact clipping cuts the walls into cells and does not lose its speed ({:.1f} tests per ray at "
+      "45°); it is slowest at 0° ({:.1f} tests per ray), the one angle where every wall face lies in a candidate split "
+      "plane (closed-box placement then puts such a triangle into the cells on both sides).\n",
+      kd.back().second.tests, kd.front().second.tests);
   return md + "\n";
 }
 
@@ -269,6 +308,7 @@ std::string time_shares(Runner& run, const Options& opt) {
   const std::vector<std::string> scenes = {"subdivided:of=cgal:bunny00,levels=1", "subdivided:of=cgal:bunny00,levels=3",
                                            std::string(kLectureInstancedSceneSpec)};
   const std::string rays = opt.full() ? "diffuse:131072" : "diffuse:16384";
+  std::vector<double> shares, per_visit, nodes, tests;
   for (const auto& s : scenes) {
     const auto scene = run.scene(s);
     const double tri_ns = ns_per_triangle_test(*scene, run.rays(s, rays));
@@ -279,9 +319,23 @@ std::string time_shares(Runner& run, const Options& opt) {
     md += fmt::format("| {} | {:.3g} | {:.1f} | {:.1f} | {:.0f} | {:.1f}% | {:.1f}% | {:.2f} | {:.0f} |\n", s,
                       scene->total_primitive_count(), t.tests, t.nodes, t.ns, 100 * tri, 100 * trav,
                       t.nodes + t.leaves > 0 ? t.ns * trav / (t.nodes + t.leaves) : 0.0, t.embree_ns);
+    shares.push_back(trav);
+    per_visit.push_back(t.nodes + t.leaves > 0 ? t.ns * trav / (t.nodes + t.leaves) : 0.0);
+    nodes.push_back(t.nodes + t.leaves);
+    tests.push_back(t.tests);
     accel.reset();
     run.forget_scene(s);
   }
+  if (shares.size() == 3)
+    md += fmt::format(
+        "\nThe trend is the lecture's: traversal takes {:.0f}% → {:.0f}% → {:.0f}% of ray-shooting time (lecture: 73% → "
+        "76% → 85%). Tests per ray stay flat ({:.1f}, {:.1f}, {:.1f}: the SAH keeps leaves small at any size). From "
+        "300k to 4.8M triangles the node visits per ray grow only logarithmically ({:.1f} → {:.1f}) but each visit "
+        "costs {:.0f} → {:.0f} ns, as the tree outgrows the caches. The instanced scene adds a top-level BVH and a "
+        "transform per instance visited ({:.1f} visits per ray at {:.0f} ns each, over one base tree that every "
+        "instance shares), so its traversal share is the largest.\n",
+        100 * shares[0], 100 * shares[1], 100 * shares[2], tests[0], tests[1], tests[2], nodes[0], nodes[1],
+        per_visit[0], per_visit[1], nodes[2], per_visit[2]);
   return md + "\n";
 }
 

@@ -20,7 +20,7 @@ def plot(out: pathlib.Path) -> None:
     t = df[df["part"] == "table"]
     if len(t):
         ax = axes[0][0]
-        labels = [f"{s}\n{a}" for s, a in zip(t["scene"], t["accel"])]
+        labels = [f"{s.split(',')[0][:20]}\n{a}" for s, a in zip(t["scene"], t["accel"])]
         x = np.arange(len(t))
         ax.bar(x - 0.2, t["tests_per_ray"], width=0.4, label="tests / ray")
         ax2 = ax.twinx()
