@@ -57,7 +57,7 @@ double ns_per_triangle_test(const Scene& scene, const std::vector<Ray>& rays) {
     });
     tests += n_rays * prims.size();
   }
-  static volatile std::size_t sink;
+  [[maybe_unused]] static volatile std::size_t sink;
   sink = hits;
   return seconds / static_cast<double>(tests) * 1e9;
 }

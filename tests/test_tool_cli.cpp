@@ -85,6 +85,32 @@ TEST(ToolCli, TracePrintsOneJsonObjectAndBruteForceMatchesTheOracle) {
   EXPECT_DOUBLE_EQ(j["prim_tests_per_ray"].get<double>(), static_cast<double>(j["triangles"].get<int>()));
 }
 
+// Determinism across runs (issue 6): two separate processes build the same structure (its
+// hash) and write the same hits, byte for byte, for every builder family.
+TEST(ToolCli, SeparateRunsBuildTheSameStructureAndHits) {
+  const std::string scene = "soup:n=3000";
+  for (const std::string accel : {"bvh", "bvh:builder=spatial", "bvh:builder=sweep,width=2", "kdtree", "octree",
+                                  "bsp", "grid"}) {
+    std::string hashes[2], hits[2];
+    for (int run = 0; run < 2; ++run) {
+      const std::string hits_path = write_file("determinism_" + std::to_string(run) + ".csv", "");
+      const ToolRun r = run_tool("trace --scene " + scene + " --accel " + accel +
+                                 " --rays diffuse:2000 --json --no-counters --hits-out " + hits_path);
+      ASSERT_EQ(r.status, 0) << accel << ": " << r.err;
+      const auto j = nlohmann::json::parse(r.out);
+      ASSERT_TRUE(j.contains("structure_hash")) << accel;
+      hashes[run] = j["structure_hash"].get<std::string>();
+      std::ifstream in(hits_path);
+      std::stringstream text;
+      text << in.rdbuf();
+      hits[run] = text.str();
+    }
+    EXPECT_EQ(hashes[0], hashes[1]) << accel;
+    EXPECT_FALSE(hits[0].empty()) << accel;
+    EXPECT_EQ(hits[0], hits[1]) << accel;
+  }
+}
+
 TEST(ToolCli, RayFilesRoundTripThroughTrace) {
   const std::string rays = write_file("one.rays", "# one ray down the z axis\n0.25 0.25 5 0 0 -1 0 inf\n");
   const std::string hits = (std::filesystem::temp_directory_path() / "raylab_cli_hits.csv").string();

@@ -3,6 +3,7 @@
 // traversal-cost heatmap. Bad input of any kind: one line `raylab: error: ...`, exit status 2.
 #include <sys/resource.h>
 
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
@@ -198,6 +199,7 @@ int run_trace(const TraceCommand& o) {
   j["bytes_per_primitive"] = scene->total_primitive_count() > 0 ? stats.bytes / scene->total_primitive_count() : 0.0;
   j["accel_nodes"] = stats.nodes;
   if (stats.sah_cost >= 0) j["sah_cost"] = stats.sah_cost;
+  if (const auto hash = accel->structure_hash()) j["structure_hash"] = fmt::format("{:016x}", *hash);
   j["build_rss_growth_bytes"] = peak_rss_bytes() - rss_before;
 
   if (!o.check.empty()) {
