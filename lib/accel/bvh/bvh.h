@@ -105,11 +105,8 @@ class Bvh final : public AggregateBase<Bvh> {
             TriangleHit th;
             const int lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, *p, th);
             if (lane >= 0) {
-              hit.t = th.t;
-              hit.u = th.u;
-              hit.v = th.v;
-              hit.prim = p->prim[lane];
-              hit.instance = kInvalidId;
+              counters.prim_hit();
+              set_scene_hit(hit, th, p->prim[lane]);
               found = true;
               if constexpr (kAnyHit) return true;
             }
