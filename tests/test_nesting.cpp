@@ -18,33 +18,51 @@
 namespace raylab {
 namespace {
 
+/// One accelerator of type `accel` on `scene`, placed in the world by `xf`.
+struct Child {
+  std::shared_ptr<const Scene> scene;
+  std::string accel;
+  AffineTransform xf;
+};
+
+/// The children as TransformedPrimitives (instance i = child i), and the same geometry
+/// flattened into one scene for the exact oracle: child i's triangle k is flat triangle
+/// offset[i] + k.
+struct PlacedChildren {
+  std::vector<std::shared_ptr<const Primitive>> prims;
+  std::shared_ptr<Scene> flat;
+  std::vector<unsigned> offset;
+};
+
+PlacedChildren place_children(const std::vector<Child>& children) {
+  PlacedChildren out;
+  out.flat = std::make_shared<Scene>();
+  out.flat->spec = "flattened children";
+  for (std::size_t i = 0; i < children.size(); ++i) {
+    const Child& c = children[i];
+    out.prims.push_back(std::make_shared<TransformedPrimitive>(
+        std::shared_ptr<const Primitive>(make_accelerator(c.accel, c.scene)), c.xf, static_cast<unsigned>(i)));
+    out.offset.push_back(static_cast<unsigned>(out.flat->mesh.size()));
+    TriangleMesh placed = c.scene->mesh;
+    for (auto& v : placed.vertices) v = c.xf.apply_point(v);
+    out.flat->mesh.append(placed);
+  }
+  return out;
+}
+
 TEST(Nesting, AcceleratorsOfDifferentTypesNestUnderTransforms) {
   const auto sphere = make_scene("sphere:n=600");
   const auto soup = make_scene("soup:n=400");
-  struct Child {
-    std::shared_ptr<const Scene> scene;
-    std::string accel;
-    AffineTransform xf;
-  };
   const std::vector<Child> children = {
       {sphere, "embree-robust", AffineTransform::translation({-2.5, 0, 0})},
       {soup, "brute", AffineTransform::translation({0, 0.2, 0}) * AffineTransform::rotation({0, 1, 0}, 0.7) *
                           AffineTransform::scaling({2, 2, 2})},
       {sphere, "exact", AffineTransform::translation({2.5, 0.5, 0}) * AffineTransform::rotation({1, 0, 0}, 0.3)},
   };
-  std::vector<std::shared_ptr<const Primitive>> prims;
-  auto flat = std::make_shared<Scene>();
-  flat->spec = "flattened children";
-  std::vector<unsigned> offset;
-  for (std::size_t i = 0; i < children.size(); ++i) {
-    const Child& c = children[i];
-    prims.push_back(std::make_shared<TransformedPrimitive>(std::shared_ptr<const Primitive>(make_accelerator(c.accel, c.scene)),
-                                                           c.xf, static_cast<unsigned>(i)));
-    offset.push_back(static_cast<unsigned>(flat->mesh.size()));
-    TriangleMesh placed = c.scene->mesh;
-    for (auto& v : placed.vertices) v = c.xf.apply_point(v);
-    flat->mesh.append(placed);
-  }
+  const PlacedChildren placed = place_children(children);
+  const auto& prims = placed.prims;
+  const auto& flat = placed.flat;
+  const auto& offset = placed.offset;
   const BruteForceOverPrimitives top(prims);
   const auto oracle = make_accelerator("exact", flat);
   const double diagonal = length(Vec3d(flat->bounds().diagonal()));
@@ -82,11 +100,6 @@ AffineTransform exact_transform(const std::array<int, 3>& axis, const Vec3d& sca
 }
 
 TEST(Nesting, BvhTopLevelOverBvhKdtreeGridAndEmbreeAgreesWithExactOracle) {
-  struct Child {
-    std::shared_ptr<const Scene> scene;
-    std::string accel;
-    AffineTransform xf;
-  };
   // Object-space extents: sphere [-1,1]^3, soups [0,1]^3, grass [0,1]x[0,0.05]x[0,1]. World boxes:
   // sphere [-1,1]^3; soup A [-2,0]x[0,2]x[0,2]; soup B [0,2]x[-2,0]x[-2,0]; grass
   // [-4,0]x[0,0.4]x[0,4]. Each soup and the grass overlap the sphere, and soup A the grass.
@@ -96,19 +109,10 @@ TEST(Nesting, BvhTopLevelOverBvhKdtreeGridAndEmbreeAgreesWithExactOracle) {
       {make_scene("soup:n=400,seed=2"), "grid", exact_transform({1, 2, 0}, {2, -2, -2})},
       {make_scene("grass:blades=3000"), "embree", exact_transform({0, 1, 2}, {-4, 8, 4})},
   };
-  std::vector<std::shared_ptr<const Primitive>> prims;
-  auto flat = std::make_shared<Scene>();
-  flat->spec = "flattened children";
-  std::vector<unsigned> offset;
-  for (std::size_t i = 0; i < children.size(); ++i) {
-    const Child& c = children[i];
-    prims.push_back(std::make_shared<TransformedPrimitive>(std::shared_ptr<const Primitive>(make_accelerator(c.accel, c.scene)),
-                                                           c.xf, static_cast<unsigned>(i)));
-    offset.push_back(static_cast<unsigned>(flat->mesh.size()));
-    TriangleMesh placed = c.scene->mesh;
-    for (auto& v : placed.vertices) v = c.xf.apply_point(v);
-    flat->mesh.append(placed);
-  }
+  const PlacedChildren placed = place_children(children);
+  const auto& prims = placed.prims;
+  const auto& flat = placed.flat;
+  const auto& offset = placed.offset;
   std::size_t overlapping_pairs = 0;
   for (std::size_t i = 0; i < prims.size(); ++i)
     for (std::size_t j = i + 1; j < prims.size(); ++j) {
