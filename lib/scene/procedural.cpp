@@ -294,7 +294,13 @@ Scene make_subdivided(const Scene& of, int levels) {
     nf *= 4;
   }
   m.reserve(nv, ne, nf);
+  // LoopT indexes its weight table by vertex valence without a bounds check and sizes it for
+  // valence < 50 by default; pole fans exceed that. Subdivision keeps old valences and gives new
+  // vertices valence <= 6, so the input's largest valence bounds every level's.
+  std::size_t max_valence = 0;
+  for (const auto vh : m.vertices()) max_valence = std::max<std::size_t>(max_valence, m.valence(vh));
   OpenMesh::Subdivider::Uniform::LoopT<TriMesh> loop;
+  loop.init_weights(std::max<std::size_t>(50, max_valence + 1));
   loop.attach(m);
   loop(static_cast<std::size_t>(levels));
   loop.detach();
