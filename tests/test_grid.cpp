@@ -4,6 +4,8 @@
 // errors. The oracle suite (test_oracle.cpp) covers the general scenes and ray sets.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <random>
 
 #include "accel/common/accel_factory.h"
@@ -149,11 +151,43 @@ TEST(GridBuild, CompactStorageAndStats) {
   EXPECT_EQ(l.offsets.back(), l.refs.size());
   EXPECT_GE(l.refs.size(), scene->primitive_count());
   EXPECT_EQ(bbox.stats().nodes, bbox.geometry().cell_count());
-  EXPECT_EQ(bbox.stats().bytes, (l.offsets.size() + l.refs.size()) * 4);
+  EXPECT_EQ(bbox.stats().bytes, (l.offsets.size() + l.refs.size()) * 4 + scene->primitive_count() * (36 + 4));
   // exact placement keeps a subset of the bbox cells of each primitive
   EXPECT_LE(exact.cells().refs.size(), l.refs.size());
   EXPECT_GE(exact.cells().refs.size(), scene->primitive_count());
   for (std::size_t c = 0; c < bbox.geometry().cell_count(); ++c) EXPECT_LE(exact.cells().count(c), l.count(c));
+}
+
+// The uniform grid's cells reference its copied triangles (cell_triangles.h); mapped back, every
+// cell must list exactly the primitives placement with scene ids puts there, and every copy must
+// be its primitive's triangle.
+TEST(GridBuild, CopiedTrianglesMapBackToThePlacedPrimitives) {
+  const auto scene = make_scene("grass:blades=3000");
+  for (const GridPlacement placement : {GridPlacement::bbox, GridPlacement::exact}) {
+    GridConfig cfg;
+    cfg.placement = placement;
+    const UniformGrid grid(scene, cfg);
+    const CellTriangles& tris = grid.triangles();
+    ASSERT_EQ(tris.tris.size(), scene->primitive_count());
+    for (std::size_t local = 0; local < tris.tris.size(); ++local) {
+      const auto& t = scene->mesh.triangles[tris.prim_of[local]];
+      const auto& v = scene->mesh.vertices;
+      ASSERT_TRUE(tris.tris[local].v0 == v[t[0]] && tris.tris[local].v1 == v[t[1]] && tris.tris[local].v2 == v[t[2]]);
+    }
+    const CellLists by_prim =
+        place_all_primitives(*scene, grid.geometry(), placement, grid_margin(scene->bounds()), CellRefIds::primitive);
+    ASSERT_EQ(by_prim.offsets, grid.cells().offsets);
+    for (std::size_t c = 0; c + 1 < by_prim.offsets.size(); ++c) {
+      std::vector<std::uint32_t> mapped, placed;
+      for (std::uint32_t r = by_prim.offsets[c]; r < by_prim.offsets[c + 1]; ++r) {
+        mapped.push_back(tris.prim_of[grid.cells().refs[r]]);
+        placed.push_back(by_prim.refs[r]);
+      }
+      std::sort(mapped.begin(), mapped.end());
+      std::sort(placed.begin(), placed.end());
+      ASSERT_EQ(mapped, placed) << "cell " << c;
+    }
+  }
 }
 
 TEST(GridBuild, NestedGridRefinesTheCrowdedCellsOfTheStadium) {

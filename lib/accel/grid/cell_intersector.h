@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "accel/grid/cell_triangles.h"
 #include "accel/grid/grid_config.h"
 #include "accel/grid/grid_geometry.h"
 #include "accel/grid/mailbox.h"
@@ -25,10 +26,43 @@ inline float cell_widening(const Ray& ray, float grid_extent) {
 
 struct NoMailbox {};
 
+/// Offers cell reference `ref` to the kernel: a local id of `tris` when `tris` holds triangles
+/// (cell_triangles.h), else a primitive id of `scene`. On a hit closer than the context's closest,
+/// writes `hit` with the scene's primitive id.
+template <class Counters>
+inline bool intersect_cell_ref(const Scene& scene, const CellTriangles& tris, std::uint32_t ref,
+                               WatertightKernel::Context& ctx, Hit& hit, Counters& counters) {
+  if (tris.tris.empty()) return intersect_scene_primitive<WatertightKernel>(scene, ref, ctx, hit, counters);
+  counters.prim_test();
+  const CellTriangles::Triangle& t = tris.tris[ref];
+  TriangleHit th;
+  if (!WatertightKernel::intersect(ctx, ref, t.v0, t.v1, t.v2, th)) return false;
+  counters.prim_hit();
+  set_scene_hit(hit, th, tris.prim_of[ref]);
+  return true;
+}
+
+/// Requests the cache lines of the copied triangles of references [begin, end) before they are
+/// tested, so that their memory latencies overlap instead of following one another.
+inline void prefetch_cell_triangles(const CellTriangles& tris, const std::uint32_t* begin, const std::uint32_t* end) {
+  if (tris.tris.empty()) return;
+  for (const std::uint32_t* p = begin; p != end; ++p) {
+    const char* t = reinterpret_cast<const char*>(tris.tris.data() + *p);
+    __builtin_prefetch(t);
+    __builtin_prefetch(t + sizeof(CellTriangles::Triangle) - 1);
+  }
+}
+
+/// The scene's primitive id of cell reference `ref`.
+inline std::uint32_t cell_ref_prim(const CellTriangles& tris, std::uint32_t ref) {
+  return tris.tris.empty() ? ref : tris.prim_of[ref];
+}
+
 /// Closest-hit state of one ray in a grid.
 template <class Counters, bool kMailbox>
 struct ClosestHitInCells {
   const Scene& scene;
+  const CellTriangles& tris;
   WatertightKernel::Context ctx;
   GridAcceptance acceptance;
   float widen;
@@ -38,14 +72,15 @@ struct ClosestHitInCells {
   bool found = false;
   [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
 
-  ClosestHitInCells(const Scene& s, const Ray& ray, GridAcceptance acc, float w, Counters& c)
-      : scene(s), ctx(WatertightKernel::prepare(ray)), acceptance(acc), widen(w), counters(c), best(ray.tmax) {}
+  ClosestHitInCells(const Scene& s, const CellTriangles& ct, const Ray& ray, GridAcceptance acc, float w, Counters& c)
+      : scene(s), tris(ct), ctx(WatertightKernel::prepare(ray)), acceptance(acc), widen(w), counters(c), best(ray.tmax) {}
 
-  /// Offers the cell's primitives refs[begin, end) with t-interval [t_enter, t_exit]; returns true
+  /// Offers the cell's references [begin, end) with t-interval [t_enter, t_exit]; returns true
   /// when the traversal may stop (a hit was accepted in this cell).
   bool leaf(const std::uint32_t* begin, const std::uint32_t* end, float /*t_enter*/, float t_exit) {
     counters.leaf();
     const float limit = acceptance == GridAcceptance::first ? best : t_exit + widen;
+    prefetch_cell_triangles(tris, begin, end);
     bool here = false;
     for (const std::uint32_t* p = begin; p != end; ++p) {
       const std::uint32_t prim = *p;
@@ -54,7 +89,7 @@ struct ClosestHitInCells {
           counters.mailbox_skip();
           if (e->t < best && e->t <= limit) {
             best = e->t;
-            hit = Hit{e->t, e->u, e->v, prim, kInvalidId};
+            hit = Hit{e->t, e->u, e->v, cell_ref_prim(tris, prim), kInvalidId};
             here = true;
           }
           continue;
@@ -62,7 +97,7 @@ struct ClosestHitInCells {
       }
       ctx.tmax = best;
       Hit h;
-      if (intersect_scene_primitive<WatertightKernel>(scene, prim, ctx, h, counters)) {
+      if (intersect_cell_ref(scene, tris, prim, ctx, h, counters)) {
         if (h.t <= limit) {
           best = h.t;
           hit = h;
@@ -83,15 +118,17 @@ struct ClosestHitInCells {
 template <class Counters, bool kMailbox>
 struct AnyHitInCells {
   const Scene& scene;
+  const CellTriangles& tris;
   WatertightKernel::Context ctx;
   Counters& counters;
   [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
 
-  AnyHitInCells(const Scene& s, const Ray& closed_ray, Counters& c)
-      : scene(s), ctx(WatertightKernel::prepare(closed_ray)), counters(c) {}
+  AnyHitInCells(const Scene& s, const CellTriangles& ct, const Ray& closed_ray, Counters& c)
+      : scene(s), tris(ct), ctx(WatertightKernel::prepare(closed_ray)), counters(c) {}
 
   bool leaf(const std::uint32_t* begin, const std::uint32_t* end, float, float) {
     counters.leaf();
+    prefetch_cell_triangles(tris, begin, end);
     Hit h;
     for (const std::uint32_t* p = begin; p != end; ++p) {
       if constexpr (kMailbox) {
@@ -100,7 +137,7 @@ struct AnyHitInCells {
           continue;
         }
       }
-      if (intersect_scene_primitive<WatertightKernel>(scene, *p, ctx, h, counters)) return true;
+      if (intersect_cell_ref(scene, tris, *p, ctx, h, counters)) return true;
       if constexpr (kMailbox) mailbox.store_miss(*p);
     }
     return false;

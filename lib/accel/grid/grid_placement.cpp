@@ -78,53 +78,95 @@ void check_ref_count(std::size_t total) {
                      " cell references overflow 32-bit offsets; lower the density d or use place=exact");
 }
 
+/// The primitives' cell ranges, in the order placement visits them: by the index of their
+/// lowest cell (row (j, k), then column i), two stable counting sorts (by i, then by row). Cells
+/// are stored in index order, so visiting primitives in this order walks the cell arrays nearly
+/// sequentially instead of at random (grass lists its blades in random positions), and
+/// primitives that share cells get nearby positions. A cell lists its primitives in this order.
+struct OrderedRanges {
+  std::vector<std::uint32_t> prims;
+  std::vector<CellRange> ranges;
+};
+
+template <class PrimAt>
+OrderedRanges ordered_ranges(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, float margin) {
+  std::vector<CellRange> by_input(n);
+  const std::size_t rows = std::size_t(g.res[1]) * std::size_t(g.res[2]);
+  std::vector<std::uint32_t> column_start(std::size_t(g.res[0]) + 1, 0), row_start(rows + 1, 0);
+  auto row_of = [&](const CellRange& r) { return std::size_t(r.lo[2]) * g.res[1] + r.lo[1]; };
+  for (std::size_t p = 0; p < n; ++p) {
+    by_input[p] = cell_range(g, prim_bounds(scene, prim_at(p)), margin);
+    ++column_start[std::size_t(by_input[p].lo[0]) + 1];
+    ++row_start[row_of(by_input[p]) + 1];
+  }
+  for (int i = 0; i < g.res[0]; ++i) column_start[i + 1] += column_start[i];
+  for (std::size_t r = 0; r < rows; ++r) row_start[r + 1] += row_start[r];
+  std::vector<std::uint32_t> by_column(n);
+  for (std::size_t p = 0; p < n; ++p) by_column[column_start[by_input[p].lo[0]]++] = static_cast<std::uint32_t>(p);
+  OrderedRanges out;
+  out.prims.resize(n);
+  out.ranges.resize(n);
+  for (const std::uint32_t p : by_column) {
+    const std::uint32_t at = row_start[row_of(by_input[p])]++;
+    out.prims[at] = prim_at(p);
+    out.ranges[at] = by_input[p];
+  }
+  return out;
+}
+
 template <class PrimAt>
 CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, GridPlacement placement,
-                float margin) {
+                float margin, CellRefIds ids) {
+  OrderedRanges ordered = ordered_ranges(scene, n, prim_at, g, margin);
+  const bool local = ids == CellRefIds::visit_order;
   CellLists out;
   const std::size_t cells = g.cell_count();
   out.offsets.assign(cells + 1, 0);
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
+    // Counting sort without a shift pass: counts go to offsets[c], an inclusive prefix sum makes
+    // offsets[c] the end of cell c, and filling backwards (last primitive first) leaves it at the
+    // start, with every cell's list in visiting order.
+    std::uint32_t* cursor = out.offsets.data();
     std::size_t total = 0;
-    for (std::size_t p = 0; p < n; ++p) {
-      const CellRange r = cell_range(g, prim_bounds(scene, prim_at(p)), margin);
-      for (int k = r.lo[2]; k <= r.hi[2]; ++k)
-        for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
-          std::uint32_t* row = count + g.index(0, j, k);
-          for (int i = r.lo[0]; i <= r.hi[0]; ++i) ++row[i];
+    for (const CellRange& r : ordered.ranges) {
+      const CellRange c = r;  // a copy: the counts are ints too, and would alias it
+      for (int k = c.lo[2]; k <= c.hi[2]; ++k)
+        for (int j = c.lo[1]; j <= c.hi[1]; ++j) {
+          std::uint32_t* row = cursor + g.index(0, j, k);
+          for (int i = c.lo[0]; i <= c.hi[0]; ++i) ++row[i];
         }
-      total += std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+      total += std::size_t(c.hi[0] - c.lo[0] + 1) * std::size_t(c.hi[1] - c.lo[1] + 1) * std::size_t(c.hi[2] - c.lo[2] + 1);
     }
     check_ref_count(total);
-    for (std::size_t c = 0; c < cells; ++c) out.offsets[c + 1] += out.offsets[c];
+    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
+    out.offsets[cells] = static_cast<std::uint32_t>(total);
     out.refs.resize(total);
-    // Fill: `cursor` reuses offsets[c] as the write position of cell c, restored afterwards by a shift.
-    std::uint32_t* cursor = out.offsets.data();
-    for (std::size_t p = 0; p < n; ++p) {
-      const std::uint32_t prim = prim_at(p);
-      const CellRange r = cell_range(g, prim_bounds(scene, prim), margin);
+    std::uint32_t* refs = out.refs.data();
+    for (std::size_t p = n; p-- > 0;) {
+      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : ordered.prims[p];
+      const CellRange r = ordered.ranges[p];
       for (int k = r.lo[2]; k <= r.hi[2]; ++k)
         for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
           std::uint32_t* row = cursor + g.index(0, j, k);
-          for (int i = r.lo[0]; i <= r.hi[0]; ++i) out.refs[row[i]++] = prim;
+          for (int i = r.lo[0]; i <= r.hi[0]; ++i) refs[--row[i]] = ref;
         }
     }
-    for (std::size_t c = cells; c > 0; --c) out.offsets[c] = out.offsets[c - 1];
-    out.offsets[0] = 0;
+    if (local) out.visit_order = std::move(ordered.prims);
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   pairs.reserve(n * 2);
   for (std::size_t p = 0; p < n; ++p) {
-    const std::uint32_t prim = prim_at(p);
-    const CellRange r = cell_range(g, prim_bounds(scene, prim), margin);
+    const std::uint32_t prim = ordered.prims[p];
+    const CellRange& r = ordered.ranges[p];
     const bool single = r.lo[0] == r.hi[0] && r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2];
     for (int k = r.lo[2]; k <= r.hi[2]; ++k)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j)
         for (int i = r.lo[0]; i <= r.hi[0]; ++i)
-          if (single || prim_meets_cell(scene, prim, g.cell_box(i, j, k), margin)) pairs.emplace_back(g.index(i, j, k), prim);
+          if (single || prim_meets_cell(scene, prim, g.cell_box(i, j, k), margin))
+            pairs.emplace_back(g.index(i, j, k), local ? static_cast<std::uint32_t>(p) : prim);
   }
   check_ref_count(pairs.size());
   for (const auto& pr : pairs) ++count[pr.first];
@@ -132,6 +174,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   out.refs.resize(pairs.size());
   std::vector<std::uint32_t> cursor(out.offsets.begin(), out.offsets.end() - 1);
   for (const auto& pr : pairs) out.refs[cursor[pr.first]++] = pr.second;
+  if (local) out.visit_order = std::move(ordered.prims);
   return out;
 }
 
@@ -139,12 +182,14 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
 
 CellLists place_primitives(const Scene& scene, const std::uint32_t* prims, std::size_t n, const GridGeometry& grid,
                            GridPlacement placement, float margin) {
-  return place(scene, n, [prims](std::size_t p) { return prims[p]; }, grid, placement, margin);
+  return place(scene, n, [prims](std::size_t p) { return prims[p]; }, grid, placement, margin,
+               CellRefIds::primitive);
 }
 
-CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin) {
+CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin,
+                               CellRefIds ids) {
   return place(scene, scene.primitive_count(), [](std::size_t p) { return static_cast<std::uint32_t>(p); }, grid,
-               placement, margin);
+               placement, margin, ids);
 }
 
 }  // namespace raylab

@@ -10,19 +10,27 @@
 
 namespace raylab {
 
+/// What the references of cell lists are.
+enum class CellRefIds {
+  primitive,    ///< the scene's primitive ids
+  visit_order,  ///< positions in CellLists::visit_order, the order placement visited the primitives
+};
+
 /// Cell c holds refs[offsets[c] .. offsets[c+1]).
 struct CellLists {
-  std::vector<std::uint32_t> offsets;  ///< cell_count + 1 entries
-  std::vector<std::uint32_t> refs;     ///< primitive ids
+  std::vector<std::uint32_t> offsets;      ///< cell_count + 1 entries
+  std::vector<std::uint32_t> refs;         ///< primitive ids, or positions in visit_order
+  std::vector<std::uint32_t> visit_order;  ///< with CellRefIds::visit_order: the primitive ids; else empty
 
   std::uint32_t count(std::size_t c) const { return offsets[c + 1] - offsets[c]; }
   std::size_t bytes() const { return (offsets.size() + refs.size()) * sizeof(std::uint32_t); }
 };
 
 /// Places `prims` (ids of `scene`, which must not be instanced) in the cells of `grid`, every cell
-/// widened by `margin` on each side (grid_geometry.h):
+/// widened by `margin` on each side (grid_geometry.h). Primitives are visited in the order of the
+/// index of the cell of their bounds' lowest corner, which is the order of every cell's list:
 ///  - bbox: the cells the primitive's bounding box overlaps; two passes (count, then fill) over
-///    the cell ranges of the primitives, no allocation besides the two arrays.
+///    the cell ranges of the primitives.
 ///  - exact: among those, the cells whose closed (widened) box the triangle meets, decided by
 ///    CGAL's exact predicate (exact_triangle_intersects_box); a sphere is kept when the distance
 ///    from its centre to the box, evaluated in double, is at most its radius·(1 + 1e-6) + margin
@@ -31,7 +39,8 @@ struct CellLists {
 CellLists place_primitives(const Scene& scene, const std::uint32_t* prims, std::size_t n, const GridGeometry& grid,
                            GridPlacement placement, float margin);
 
-/// The same for all primitives of the scene (ids 0 .. primitive_count-1).
-CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin);
+/// The same for all primitives of the scene (ids 0 .. primitive_count-1), with references of kind `ids`.
+CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin,
+                               CellRefIds ids = CellRefIds::primitive);
 
 }  // namespace raylab

@@ -23,13 +23,15 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   UniformGrid(std::shared_ptr<const Scene> scene, const GridConfig& config);
 
   std::string name() const override { return "grid"; }
-  /// bytes: the offsets and the index array; nodes: cells.
-  AccelStats stats() const override { return {lists_.bytes(), grid_.cell_count(), -1.0}; }
+  /// bytes: the offsets, the index array and the copied triangles; nodes: cells.
+  AccelStats stats() const override { return {lists_.bytes() + tris_.bytes(), grid_.cell_count(), -1.0}; }
   std::optional<std::uint64_t> structure_hash() const override;
   Bounds3f bounds() const override { return bounds_; }
 
   const GridGeometry& geometry() const { return grid_; }
+  /// The cell lists; their references are local ids of triangles() when it is not empty.
   const CellLists& cells() const { return lists_; }
+  const CellTriangles& triangles() const { return tris_; }
   const GridConfig& config() const { return config_; }
 
   template <class Counters>
@@ -48,7 +50,7 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(grid_.box, ray, inv, ray.tmin, ray.tmax, t0, t1)) return false;
-    ClosestHitInCells<Counters, kMailbox> state(*scene_, ray, config_.acceptance, cell_widening(ray, extent_), counters);
+    ClosestHitInCells<Counters, kMailbox> state(*scene_, tris_, ray, config_.acceptance, cell_widening(ray, extent_), counters);
     const std::uint32_t* refs = lists_.refs.data();
     const std::uint32_t* offsets = lists_.offsets.data();
     grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
@@ -68,7 +70,7 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(grid_.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;
-    AnyHitInCells<Counters, kMailbox> state(*scene_, closed, counters);
+    AnyHitInCells<Counters, kMailbox> state(*scene_, tris_, closed, counters);
     const std::uint32_t* refs = lists_.refs.data();
     const std::uint32_t* offsets = lists_.offsets.data();
     return grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
@@ -84,6 +86,7 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   GridGeometry grid_;
   float extent_ = 0.0f;  ///< sum of the grid's extents, the D of cell_widening
   CellLists lists_;
+  CellTriangles tris_;
 };
 
 }  // namespace raylab

@@ -43,6 +43,7 @@ NestedGrid::NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfi
   std::vector<std::uint32_t> all(scene_->primitive_count());
   std::iota(all.begin(), all.end(), 0u);
   build_level(all.data(), all.size(), box, 0);
+  tris_ = renumber_cell_triangles(*scene_, refs_);
 }
 
 std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level) {

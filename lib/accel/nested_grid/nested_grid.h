@@ -24,9 +24,10 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfig& config);
 
   std::string name() const override { return "nested-grid"; }
-  /// bytes: levels, cells and the index array; nodes: cells over all levels.
+  /// bytes: levels, cells, the index array and the copied triangles; nodes: cells over all levels.
   AccelStats stats() const override {
-    return {levels_.size() * sizeof(Level) + cells_.size() * sizeof(Cell) + refs_.size() * sizeof(std::uint32_t),
+    return {levels_.size() * sizeof(Level) + cells_.size() * sizeof(Cell) + refs_.size() * sizeof(std::uint32_t) +
+                tris_.bytes(),
             cells_.size(), -1.0};
   }
   Bounds3f bounds() const override { return bounds_; }
@@ -79,7 +80,7 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, ray.tmax, t0, t1)) return false;
-    ClosestHitInCells<Counters, kMailbox> state(*scene_, ray, config_.cells.acceptance, cell_widening(ray, extent_),
+    ClosestHitInCells<Counters, kMailbox> state(*scene_, tris_, ray, config_.cells.acceptance, cell_widening(ray, extent_),
                                                 counters);
     traverse(0, ray, inv, t0, t1, state, counters);
     if (!state.found) return false;
@@ -94,7 +95,7 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(levels_[0].geom.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;
-    AnyHitInCells<Counters, kMailbox> state(*scene_, closed, counters);
+    AnyHitInCells<Counters, kMailbox> state(*scene_, tris_, closed, counters);
     return traverse(0, closed, inv, t0, t1, state, counters);
   }
 
@@ -106,7 +107,8 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   double cell_budget_ = 0.0;   ///< see NestedGridConfig::cells_per_primitive_budget
   std::vector<Level> levels_;  ///< levels_[0] is the top grid
   std::vector<Cell> cells_;
-  std::vector<std::uint32_t> refs_;
+  std::vector<std::uint32_t> refs_;  ///< local ids of tris_ (primitive ids when tris_ is empty)
+  CellTriangles tris_;
 };
 
 }  // namespace raylab
