@@ -1,52 +1,75 @@
 #include "geometry/triangle_clipping.h"
 
-#include <array>
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace raylab {
+
 namespace {
 
-struct ClipVertex {
-  Vec3d p;
-  bool exact[3];  ///< per coordinate: the value is the exact coordinate of the true vertex
-};
-
-/// A polygon of at most 3 + 6 vertices (each clip adds at most one).
-struct Polygon {
-  std::array<ClipVertex, 12> v;
+/// A clip polygon: at most 3 + 6 vertices (each clip adds at most one).
+struct ClipPolygon {
+  double p[12][3];
+  unsigned exact[12];  ///< bit k: coordinate k is the exact coordinate of the true vertex
   int n = 0;
 };
 
-/// Keeps the part of `in` with sign·(p[axis] - plane) >= 0.
-void clip(const Polygon& in, int axis, double plane, double sign, Polygon& out) {
-  out.n = 0;
+/// Keeps the part of `in` with sign·(p[axis] - plane) >= 0 (one Sutherland-Hodgman step).
+/// Returns false, leaving `out` untouched, when every vertex is kept: the clip is then the
+/// identity.
+bool clip_polygon(const ClipPolygon& in, int axis, double plane, double sign, ClipPolygon& out) {
+  double d[12];
+  bool all_in = true;
   for (int i = 0; i < in.n; ++i) {
-    const ClipVertex& a = in.v[i];
-    const ClipVertex& b = in.v[(i + 1) % in.n];
-    const double da = sign * (a.p[axis] - plane), db = sign * (b.p[axis] - plane);
-    if (da >= 0.0) out.v[out.n++] = a;
+    d[i] = sign * (in.p[i][axis] - plane);
+    all_in &= d[i] >= 0.0;
+  }
+  if (all_in) return false;
+  int m = 0;
+  for (int i = 0; i < in.n; ++i) {
+    const int j = i + 1 == in.n ? 0 : i + 1;
+    const double da = d[i], db = d[j];
+    if (da >= 0.0) {
+      for (int k = 0; k < 3; ++k) out.p[m][k] = in.p[i][k];
+      out.exact[m++] = in.exact[i];
+    }
     if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) {
       const double s = da / (da - db);
-      ClipVertex c;
-      c.p = a.p + (b.p - a.p) * s;
-      for (int k = 0; k < 3; ++k) c.exact[k] = false;
-      c.p[axis] = plane;
-      c.exact[axis] = true;
-      out.v[out.n++] = c;
+      for (int k = 0; k < 3; ++k) out.p[m][k] = in.p[i][k] + (in.p[j][k] - in.p[i][k]) * s;
+      out.p[m][axis] = plane;
+      out.exact[m++] = 1u << axis;
     }
   }
+  out.n = m;
+  return true;
 }
 
+/// std::nextafter(f, -inf) for f not NaN and not -inf, on the bits (so independent of the
+/// denormal modes, like the library function).
+float next_down(float f) {
+  const auto b = std::bit_cast<std::uint32_t>(f);
+  const std::uint32_t down = (b & 0x7fffffffu) == 0 ? 0x80000001u : ((b >> 31) ? b + 1 : b - 1);
+  return std::bit_cast<float>(down);
+}
+/// std::nextafter(f, +inf) for f not NaN and not +inf.
+float next_up(float f) {
+  const auto b = std::bit_cast<std::uint32_t>(f);
+  const std::uint32_t up = (b & 0x7fffffffu) == 0 ? 0x00000001u : ((b >> 31) ? b - 1 : b + 1);
+  return std::bit_cast<float>(up);
+}
+/// The largest float <= x and the smallest float >= x, without branches.
 float round_down(double x) {
-  float f = static_cast<float>(x);
-  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-  return f;
+  const float f = static_cast<float>(x);
+  const float g = next_down(f);
+  return static_cast<double>(f) > x ? g : f;
 }
 float round_up(double x) {
-  float f = static_cast<float>(x);
-  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-  return f;
+  const float f = static_cast<float>(x);
+  const float g = next_up(f);
+  return static_cast<double>(f) < x ? g : f;
 }
 
 }  // namespace
@@ -58,23 +81,31 @@ Bounds3f clipped_triangle_bounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& 
   // Entirely inside: nothing to clip, the bounds are exact.
   if (box.contains(tri.lo) && box.contains(tri.hi)) return tri;
 
-  Polygon a, b;
-  for (const Vec3f& p : {p0, p1, p2}) a.v[a.n++] = ClipVertex{Vec3d(p), {true, true, true}};
+  ClipPolygon poly[2];
+  int cur = 0;
+  for (const Vec3f& p : {p0, p1, p2}) {
+    ClipPolygon& a = poly[0];
+    a.p[a.n][0] = p.x;
+    a.p[a.n][1] = p.y;
+    a.p[a.n][2] = p.z;
+    a.exact[a.n++] = 7u;
+  }
   for (int axis = 0; axis < 3; ++axis) {
-    clip(a, axis, box.lo[axis], 1.0, b);
-    clip(b, axis, box.hi[axis], -1.0, a);
-    if (a.n == 0) return fallback;
+    if (clip_polygon(poly[cur], axis, box.lo[axis], 1.0, poly[cur ^ 1])) cur ^= 1;
+    if (clip_polygon(poly[cur], axis, box.hi[axis], -1.0, poly[cur ^ 1])) cur ^= 1;
+    if (poly[cur].n == 0) return fallback;
   }
   // Each computed coordinate is a convex combination evaluated in double after at most six
   // clips; 1e-12 of the magnitude of the coordinates bounds its error with a wide margin.
+  const ClipPolygon& a = poly[cur];
   const double scale = std::max(max_component(abs(Vec3d(box.lo))), max_component(abs(Vec3d(box.hi))));
   const double scale_tri = std::max(max_component(abs(Vec3d(tri.lo))), max_component(abs(Vec3d(tri.hi))));
   const double margin = 1e-12 * (std::max(scale, scale_tri) + std::numeric_limits<double>::min());
   Bounds3f r;
   for (int i = 0; i < a.n; ++i)
     for (int k = 0; k < 3; ++k) {
-      const double x = a.v[i].p[k];
-      const double m = a.v[i].exact[k] ? 0.0 : margin;
+      const double x = a.p[i][k];
+      const double m = (a.exact[i] >> k & 1u) ? 0.0 : margin;
       r.lo[k] = std::min(r.lo[k], round_down(x - m));
       r.hi[k] = std::max(r.hi[k], round_up(x + m));
     }

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
+#include <string>
 
 #include "accel/kdtree/sah_sweep_events.h"
 #include "accel/kdtree/sah_sweep_sort.h"
+#include "geometry/input_error.h"
 
 namespace raylab {
 
@@ -24,20 +27,32 @@ class KdBuilderImpl {
   void build_root(std::vector<PrimRef> refs) {
     max_depth_ = kd_max_depth(config_, refs.size());
     root_sa_ = surface_area_d(out_.bounds);
-    NodeEvents events;
+    levels_.resize(static_cast<std::size_t>(max_depth_) + 2);
+    Level& root = levels_[0];
+    root.refs[0] = std::move(refs);
     const bool use_events = config_.builder == KdBuilder::sah && config_.sweep == KdSweep::events;
     if (use_events)
       for (int a = 0; a < 3; ++a) {
-        append_events(refs, a, events.axis[a]);
-        std::sort(events.axis[a].begin(), events.axis[a].end());
+        append_events(root.refs[0], a, root.events[0].axis[a]);
+        sort_root_events(root.events[0].axis[a]);
       }
-    build(refs, use_events ? &events : nullptr, out_.bounds, 0);
+    build(root.refs[0], use_events ? &root.events[0] : nullptr, out_.bounds, 0);
   }
 
  private:
+  /// The references and events of the two children of the node being split at depth d - 1 live
+  /// in levels_[d]: a node at depth d writes only levels_[d + 1], so the right child's data stay
+  /// intact while the left subtree is built.
+  static constexpr std::size_t kReleaseAbove = 1u << 14;
+
+  struct Level {
+    std::vector<PrimRef> refs[2];
+    NodeEvents events[2];
+  };
+
   double area_weight(const Bounds3f& box) const { return root_sa_ > 0.0 ? surface_area_d(box) / root_sa_ : 1.0; }
 
-  void make_leaf(std::vector<PrimRef>& refs, const Bounds3f& box, int depth) {
+  void make_leaf(std::span<const PrimRef> refs, const Bounds3f& box, int depth) {
     const auto first = static_cast<std::uint32_t>(out_.prims.size());
     for (const PrimRef& r : refs) out_.prims.push_back(r.prim);
     std::sort(out_.prims.begin() + first, out_.prims.end());
@@ -48,7 +63,7 @@ class KdBuilderImpl {
   }
 
   /// The split to make, or an invalid candidate for a leaf.
-  SplitCandidate choose(const std::vector<PrimRef>& refs, const NodeEvents* events, const Bounds3f& box) const {
+  SplitCandidate choose(std::span<const PrimRef> refs, const NodeEvents* events, const Bounds3f& box) {
     const std::size_t n = refs.size();
     SplitCandidate c;
     switch (config_.builder) {
@@ -77,6 +92,9 @@ class KdBuilderImpl {
     return c;
   }
 
+  /// Builds the subtree of a node at `depth` whose references are `refs` (and, for the event
+  /// sweep, whose sorted events are `events`); both must live outside levels_[depth + 1], and
+  /// both are consumed.
   void build(std::vector<PrimRef>& refs, NodeEvents* events, const Bounds3f& box, int depth) {
     const std::size_t n = refs.size();
     SplitCandidate split;
@@ -91,17 +109,32 @@ class KdBuilderImpl {
     lbox.hi[a] = s;
     rbox.lo[a] = s;
 
-    std::vector<PrimRef> left, right, left_straddlers, right_straddlers;
+    Level& next = levels_[static_cast<std::size_t>(depth) + 1];
+    std::vector<PrimRef>& left = next.refs[0];
+    std::vector<PrimRef>& right = next.refs[1];
+    std::vector<PrimRef>& left_straddlers = left_straddlers_;
+    std::vector<PrimRef>& right_straddlers = right_straddlers_;
+    left.clear();
+    right.clear();
+    left_straddlers.clear();
+    right_straddlers.clear();
+    // Events per axis of the one-sided references (one if planar along the axis, else two).
+    std::size_t kept_l[3] = {0, 0, 0}, kept_r[3] = {0, 0, 0};
+    auto count_events = [](const PrimRef& r, std::size_t(&k)[3]) {
+      for (int b = 0; b < 3; ++b) k[b] += r.box.lo[b] == r.box.hi[b] ? 1 : 2;
+    };
     for (const PrimRef& r : refs) {
       if (r.box.hi[a] < s) {
         left.push_back(r);
         side_[r.prim] = Side::left_only;
+        count_events(r, kept_l);
       } else if (r.box.lo[a] > s) {
         right.push_back(r);
         side_[r.prim] = Side::right_only;
+        count_events(r, kept_r);
       } else {
-        const bool in_l = ref_meets_box(scene_, r, lbox, config_.clip);
-        const bool in_r = ref_meets_box(scene_, r, rbox, config_.clip);
+        bool in_l, in_r;
+        ref_meets_children(scene_, r, box, a, s, config_.clip, in_l, in_r);
         if (in_l) left_straddlers.push_back({ref_bounds_in(scene_, r, lbox, config_.clip), r.prim});
         if (in_r) right_straddlers.push_back({ref_bounds_in(scene_, r, rbox, config_.clip), r.prim});
         side_[r.prim] = in_l && in_r ? Side::both : (in_l ? Side::left_only : (in_r ? Side::right_only : Side::none));
@@ -113,33 +146,38 @@ class KdBuilderImpl {
       make_leaf(refs, box, depth);
       return;
     }
-    NodeEvents left_events, right_events;
     if (events) {
       // A primitive that lost one side in the exact test is re-clipped like a straddler: its
       // events come from its new bounds.
       for (const PrimRef& r : left_straddlers) side_[r.prim] = Side::both;
       for (const PrimRef& r : right_straddlers) side_[r.prim] = Side::both;
-      split_events(*events, side_, left_straddlers, right_straddlers, left_events, right_events);
-      *events = NodeEvents{};
+      split_events(*events, side_, left_straddlers, right_straddlers, kept_l, kept_r, next.events[0], next.events[1],
+                   split_scratch_);
     }
     left.insert(left.end(), left_straddlers.begin(), left_straddlers.end());
     right.insert(right.end(), right_straddlers.begin(), right_straddlers.end());
-    std::vector<PrimRef>().swap(refs);
-    left_straddlers = {};
-    right_straddlers = {};
+    // The node's own lists are dead now; large ones are freed (there are few such nodes), so
+    // that the memory held along the current path stays close to the pending right children.
+    if (n > kReleaseAbove) {
+      std::vector<PrimRef>().swap(refs);
+      if (events) *events = NodeEvents{};
+    }
 
     out_.sah_cost += config_.cost.c_trav * area_weight(box);
     const auto index = static_cast<std::uint32_t>(out_.nodes.size());
     out_.nodes.push_back(KdNode::make_interior(a, s));
-    build(left, events ? &left_events : nullptr, lbox, depth + 1);
+    build(left, events ? &next.events[0] : nullptr, lbox, depth + 1);
     out_.nodes[index].set_above_child(static_cast<std::uint32_t>(out_.nodes.size()));
-    build(right, events ? &right_events : nullptr, rbox, depth + 1);
+    build(right, events ? &next.events[1] : nullptr, rbox, depth + 1);
   }
 
   const Scene& scene_;
   const KdTreeConfig& config_;
   KdTreeData& out_;
   std::vector<Side> side_;
+  std::vector<Level> levels_;
+  std::vector<PrimRef> left_straddlers_, right_straddlers_;
+  SplitEventsScratch split_scratch_;
   int max_depth_ = 0;
   double root_sa_ = 0.0;
 };
@@ -147,6 +185,9 @@ class KdBuilderImpl {
 }  // namespace
 
 KdTreeData build_kdtree(const Scene& scene, const KdTreeConfig& config) {
+  if (scene.primitive_count() >= SplitEvent::kMaxPrims)
+    throw InputError("kdtree: the scene has " + std::to_string(scene.primitive_count()) +
+                     " primitives; the kd-tree builds at most 2^30 - 1");
   KdTreeData data;
   data.bounds = scene.bounds();
   KdBuilderImpl builder(scene, config, data);

@@ -1,57 +1,111 @@
 #include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cstring>
 
 #include "accel/kdtree/sah_sweep_events.h"
 #include "accel/kdtree/sah_sweep_sort.h"
 
 namespace raylab {
 
-void append_events(const std::vector<PrimRef>& refs, int axis, std::vector<SplitEvent>& out) {
+void append_events(std::span<const PrimRef> refs, int axis, EventVector& out) {
   for (const PrimRef& r : refs) {
     const float lo = r.box.lo[axis], hi = r.box.hi[axis];
     if (lo == hi) {
-      out.push_back({lo, SplitEvent::planar, r.prim});
+      out.push_back(SplitEvent::make(lo, SplitEvent::planar, r.prim));
     } else {
-      out.push_back({lo, SplitEvent::start, r.prim});
-      out.push_back({hi, SplitEvent::end, r.prim});
+      out.push_back(SplitEvent::make(lo, SplitEvent::start, r.prim));
+      out.push_back(SplitEvent::make(hi, SplitEvent::end, r.prim));
     }
   }
 }
 
-void sweep_events(const std::vector<SplitEvent>& events, int axis, const Bounds3f& box, std::size_t n,
-                  const SahCost& cost, SplitCandidate& best) {
-  const float lo = box.lo[axis], hi = box.hi[axis];
+namespace {
+
+/// sweep_events for a fixed axis A.
+template <int A>
+void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::size_t n, const SahCost& cost_in,
+                SplitCandidate& best_io) {
+  const SahCost cost = cost_in;  // local copies: stores to best_io could alias cost_in
+  SplitCandidate best = best_io;
+  const float lo = box.lo[A], hi = box.hi[A];
   if (!(lo < hi)) return;
   const double sa = surface_area_d(box);
   if (!(sa > 0.0)) return;
   // surface_area_d of the children with the split axis' extent substituted, term for term.
-  double d[3] = {double(box.hi.x) - box.lo.x, double(box.hi.y) - box.lo.y, double(box.hi.z) - box.lo.z};
+  const double d0 = double(box.hi.x) - box.lo.x, d1 = double(box.hi.y) - box.lo.y, d2 = double(box.hi.z) - box.lo.z;
   auto area_with = [&](double extent) {
-    d[axis] = extent;
-    return 2.0 * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+    const double a0 = A == 0 ? extent : d0, a1 = A == 1 ? extent : d1, a2 = A == 2 ? extent : d2;
+    return 2.0 * (a0 * a1 + a1 * a2 + a2 * a0);
   };
-  std::size_t left_before = 0;  // #{lo < p}
-  std::size_t right_from = n;   // #{hi >= p}
   const SplitEvent* e = events.data();
   const std::size_t m = events.size();
-  for (std::size_t i = 0; i < m;) {
-    const float p = e[i].pos;
-    std::size_t ends = 0, planars = 0, starts = 0;
-    for (; i < m && e[i].pos == p; ++i) {
-      switch (e[i].type) {
-        case SplitEvent::end: ++ends; break;
-        case SplitEvent::planar: ++planars; break;
-        case SplitEvent::start: ++starts; break;
-      }
-    }
-    const std::size_t n_l = left_before + starts + planars;
-    const std::size_t n_r = right_from;
+  if (m == 0) return;
+  // At the last event of each run of equal positions p (p is the first event's position):
+  // N(L) = #{lo <= p} = starts and planars so far, N(R) = n - #{hi < p}.
+  std::size_t starts_planars = 0, ends_planars = 0, ends_planars_before = 0;
+  float p = e[0].pos;
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::uint32_t type = e[i].bits & 3u;
+    starts_planars += type != SplitEvent::end;
+    ends_planars += type != SplitEvent::start;
+    if (i + 1 < m && e[i + 1].pos == p) continue;
     if (p > lo && p < hi) {
       const double sa_l = area_with(double(p) - lo), sa_r = area_with(double(hi) - p);
-      const double c = cost.split(sa, sa_l, sa_r, n_l, n_r);
-      if (c < best.cost) best = {axis, p, c};
+      const double c = cost.split(sa, sa_l, sa_r, starts_planars, n - ends_planars_before);
+      if (c < best.cost) best = {A, p, c};
     }
-    left_before += starts + planars;
-    right_from -= ends + planars;
+    ends_planars_before = ends_planars;
+    if (i + 1 < m) p = e[i + 1].pos;
+  }
+  best_io = best;
+}
+
+}  // namespace
+
+void sweep_events(std::span<const SplitEvent> events, int axis, const Bounds3f& box, std::size_t n,
+                  const SahCost& cost, SplitCandidate& best) {
+  switch (axis) {
+    case 0: sweep_axis<0>(events, box, n, cost, best); break;
+    case 1: sweep_axis<1>(events, box, n, cost, best); break;
+    default: sweep_axis<2>(events, box, n, cost, best); break;
+  }
+}
+
+void sort_root_events(EventVector& events) {
+  // Without -0 and NaN, equal keys have equal bits; then every correct sort yields an order that
+  // the sweep, the splices and the merges (which see only keys, and keep relative orders) cannot
+  // tell from std::sort's, so a radix sort is used. Otherwise std::sort, as before.
+  bool plain = events.size() >= 4096;
+  for (std::size_t i = 0; plain && i < events.size(); ++i) {
+    const auto b = std::bit_cast<std::uint32_t>(events[i].pos);
+    plain = b != 0x80000000u && (b & 0x7fffffffu) <= 0x7f800000u;
+  }
+  if (!plain) {
+    std::sort(events.begin(), events.end());
+    return;
+  }
+  // Key: the float's bits mapped to an unsigned order-preserving integer, then the type.
+  auto key = [](const SplitEvent& e) {
+    const auto b = std::bit_cast<std::uint32_t>(e.pos);
+    const std::uint32_t ordered = (b & 0x80000000u) ? ~b : (b | 0x80000000u);
+    return (static_cast<std::uint64_t>(ordered) << 2) | (e.bits & 3u);
+  };
+  constexpr int kBits = 12;
+  constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+  EventVector tmp(events.size());
+  std::vector<std::size_t> count(kBuckets);
+  for (int shift = 0; shift < 34; shift += kBits) {  // stable LSD passes over the 34-bit key
+    std::fill(count.begin(), count.end(), 0);
+    for (const SplitEvent& e : events) ++count[(key(e) >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& c : count) {
+      const std::size_t k = c;
+      c = sum;
+      sum += k;
+    }
+    for (const SplitEvent& e : events) tmp[count[(key(e) >> shift) & (kBuckets - 1)]++] = e;
+    events.swap(tmp);
   }
 }
 
@@ -61,9 +115,9 @@ SplitCandidate find_split_events(const NodeEvents& events, const Bounds3f& box, 
   return best;
 }
 
-SplitCandidate find_split_sort(const std::vector<PrimRef>& refs, const Bounds3f& box, const SahCost& cost) {
+SplitCandidate find_split_sort(std::span<const PrimRef> refs, const Bounds3f& box, const SahCost& cost) {
   SplitCandidate best;
-  std::vector<SplitEvent> events;
+  EventVector events;
   for (int a = 0; a < 3; ++a) {
     events.clear();
     append_events(refs, a, events);
@@ -73,49 +127,92 @@ SplitCandidate find_split_sort(const std::vector<PrimRef>& refs, const Bounds3f&
   return best;
 }
 
-void split_events(const NodeEvents& parent, const std::vector<Side>& side, const std::vector<PrimRef>& left_straddlers,
-                  const std::vector<PrimRef>& right_straddlers, NodeEvents& left, NodeEvents& right) {
-  std::vector<SplitEvent> new_l, new_r;
-  std::vector<Side> event_side;  // side[e.prim] in event order: one random lookup per event
+namespace {
+
+/// std::sort, with its result: up to 16 elements libstdc++'s std::sort is a plain insertion
+/// sort, which is stable, as is this one.
+void sort_events(EventVector& v) {
+  const std::size_t n = v.size();
+  if (n > 16) {
+    std::sort(v.begin(), v.end());
+    return;
+  }
+  SplitEvent* e = v.data();
+  for (std::size_t i = 1; i < n; ++i) {
+    const SplitEvent x = e[i];
+    std::size_t j = i;
+    for (; j > 0 && x < e[j - 1]; --j) e[j] = e[j - 1];
+    e[j] = x;
+  }
+}
+
+/// Merges the sorted `add` into the sorted out[0, k), in place (out has room for k + add.size()),
+/// with the result of std::merge(out, add): at equal keys the elements of out come first.
+void merge_into(SplitEvent* out, std::size_t k, const EventVector& add) {
+  const SplitEvent* const b_first = add.data();
+  const SplitEvent* b = b_first + add.size();
+  SplitEvent* a = out + k;
+  SplitEvent* dst = a + add.size();
+  if (add.size() * 16 < k) {
+    // Few new events: find each one's place by binary search and move the run after it.
+    while (b != b_first) {
+      const SplitEvent x = *--b;
+      SplitEvent* p = std::upper_bound(out, a, x);  // out's unplaced elements that go after x
+      const auto run = static_cast<std::size_t>(a - p);
+      dst -= run;
+      std::memmove(dst, p, run * sizeof(SplitEvent));
+      a = p;
+      *--dst = x;
+    }
+    return;
+  }
+  while (b != b_first) {
+    if (a != out && *(b - 1) < *(a - 1))
+      *--dst = *--a;
+    else
+      *--dst = *--b;
+  }
+}
+
+}  // namespace
+
+void split_events(const NodeEvents& parent, const std::vector<Side>& side, std::span<const PrimRef> left_straddlers,
+                  std::span<const PrimRef> right_straddlers, const std::size_t (&kept_l)[3],
+                  const std::size_t (&kept_r)[3], NodeEvents& left, NodeEvents& right, SplitEventsScratch& scratch) {
+  EventVector& new_l = scratch.new_l;
+  EventVector& new_r = scratch.new_r;
+  const Side* sd = side.data();
   for (int a = 0; a < 3; ++a) {
     new_l.clear();
     new_r.clear();
     append_events(left_straddlers, a, new_l);
     append_events(right_straddlers, a, new_r);
-    std::sort(new_l.begin(), new_l.end());
-    std::sort(new_r.begin(), new_r.end());
-    const std::vector<SplitEvent>& in = parent.axis[a];
-    std::size_t n_l = new_l.size(), n_r = new_r.size();
-    event_side.resize(in.size());
-    for (std::size_t i = 0; i < in.size(); ++i) {
-      const Side s = side[in[i].prim];
-      event_side[i] = s;
-      n_l += s == Side::left_only;
-      n_r += s == Side::right_only;
-    }
-    std::vector<SplitEvent>& out_l = left.axis[a];
-    std::vector<SplitEvent>& out_r = right.axis[a];
-    out_l.resize(n_l);
-    out_r.resize(n_r);
-    // One pass splices the events of one-sided primitives into both children, in order, merging
-    // the straddlers' new events in (as std::merge: at equal keys the parent's event first).
+    sort_events(new_l);
+    sort_events(new_r);
+    const EventVector& in = parent.axis[a];
+    EventVector& out_l = left.axis[a];
+    EventVector& out_r = right.axis[a];
+    // Room for the child's events, plus one slot that the branchless splice may write past the end.
+    out_l.resize(kept_l[a] + new_l.size() + 1);
+    out_r.resize(kept_r[a] + new_r.size() + 1);
+    // One pass splices the events of one-sided primitives into both children, in order; then the
+    // straddlers' new events are merged in (as std::merge: at equal keys the parent's event first).
     SplitEvent* pl = out_l.data();
     SplitEvent* pr = out_r.data();
-    const SplitEvent *nl = new_l.data(), *nl_end = nl + new_l.size();
-    const SplitEvent *nr = new_r.data(), *nr_end = nr + new_r.size();
-    for (std::size_t i = 0; i < in.size(); ++i) {
-      const SplitEvent& e = in[i];
-      const Side s = event_side[i];
-      if (s == Side::left_only) {
-        while (nl != nl_end && *nl < e) *pl++ = *nl++;
-        *pl++ = e;
-      } else if (s == Side::right_only) {
-        while (nr != nr_end && *nr < e) *pr++ = *nr++;
-        *pr++ = e;
-      }
+    for (const SplitEvent& e : in) {
+      const Side s = sd[e.prim()];
+      *pl = e;
+      *pr = e;
+      pl += s == Side::left_only;
+      pr += s == Side::right_only;
     }
-    pl = std::copy(nl, nl_end, pl);
-    pr = std::copy(nr, nr_end, pr);
+    const auto k_l = static_cast<std::size_t>(pl - out_l.data());
+    const auto k_r = static_cast<std::size_t>(pr - out_r.data());
+    assert(k_l == kept_l[a] && k_r == kept_r[a]);
+    merge_into(out_l.data(), k_l, new_l);
+    merge_into(out_r.data(), k_r, new_r);
+    out_l.resize(k_l + new_l.size());
+    out_r.resize(k_r + new_r.size());
   }
 }
 

@@ -12,6 +12,9 @@
 /// Wald and Havran §4.3), so both see identical event sequences and choose the same split.
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <utility>
+#include <span>
 #include <vector>
 
 #include "accel/kdtree/sah_cost.h"
@@ -19,16 +22,45 @@
 
 namespace raylab {
 
+/// One event, 8 bytes: the primitive id and the type share one word.
 struct SplitEvent {
-  enum Type : std::uint8_t { end = 0, planar = 1, start = 2 };
-  float pos;
-  Type type;
-  std::uint32_t prim;
+  enum Type : std::uint32_t { end = 0, planar = 1, start = 2 };
+  /// Primitive ids must be below this (checked by the builder).
+  static constexpr std::uint32_t kMaxPrims = 1u << 30;
 
+  float pos;
+  std::uint32_t bits;  ///< prim << 2 | type
+
+  static SplitEvent make(float pos, Type type, std::uint32_t prim) { return {pos, prim << 2 | type}; }
+  Type type() const { return static_cast<Type>(bits & 3u); }
+  std::uint32_t prim() const { return bits >> 2; }
+
+  /// By position, then type (end < planar < start); the order among equal keys is irrelevant to
+  /// the sweep.
   friend bool operator<(const SplitEvent& a, const SplitEvent& b) {
-    return a.pos < b.pos || (a.pos == b.pos && a.type < b.type);
+    return a.pos < b.pos || (a.pos == b.pos && (a.bits & 3u) < (b.bits & 3u));
   }
 };
+static_assert(sizeof(SplitEvent) == 8);
+
+/// An allocator whose value-less construct leaves trivial types uninitialised, so that
+/// resizing an event list before overwriting it costs nothing.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitAllocator<U>;
+  };
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0)
+      ::new (static_cast<void*>(p)) U;
+    else
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+using EventVector = std::vector<SplitEvent, UninitAllocator<SplitEvent>>;
 
 /// The best split found so far. Ties keep the earlier candidate (lower axis, then lower
 /// position), so the choice does not depend on how the events were produced.
@@ -40,17 +72,20 @@ struct SplitCandidate {
 };
 
 /// Appends the events of `refs` along `axis` (unsorted).
-void append_events(const std::vector<PrimRef>& refs, int axis, std::vector<SplitEvent>& out);
+void append_events(std::span<const PrimRef> refs, int axis, EventVector& out);
 
 /// Sweeps the sorted `events` of a node with `n` primitives along `axis`, updating `best` with
 /// every candidate strictly inside `box` that costs less.
-void sweep_events(const std::vector<SplitEvent>& events, int axis, const Bounds3f& box, std::size_t n,
+void sweep_events(std::span<const SplitEvent> events, int axis, const Bounds3f& box, std::size_t n,
                   const SahCost& cost, SplitCandidate& best);
 
 /// The node's three sorted event lists (`sweep=events`).
 struct NodeEvents {
-  std::vector<SplitEvent> axis[3];
+  EventVector axis[3];
 };
+
+/// Sorts the root's events of one axis into an order that builds the same tree as std::sort's.
+void sort_root_events(EventVector& events);
 
 /// The best split of a node from its presorted events.
 SplitCandidate find_split_events(const NodeEvents& events, const Bounds3f& box, std::size_t n, const SahCost& cost);
@@ -58,10 +93,19 @@ SplitCandidate find_split_events(const NodeEvents& events, const Bounds3f& box, 
 /// Which children a primitive of the node being split went to.
 enum class Side : std::uint8_t { left_only, right_only, both, none };
 
+/// Working storage of split_events, kept across calls so that nodes do not allocate.
+struct SplitEventsScratch {
+  EventVector new_l, new_r;
+};
+
 /// The children's sorted event lists: events of primitives on one side only are spliced in
 /// order; primitives in both children got new (clipped) bounds in `left_straddlers` and
 /// `right_straddlers`, whose events are sorted and merged in. `side` is indexed by primitive id.
-void split_events(const NodeEvents& parent, const std::vector<Side>& side, const std::vector<PrimRef>& left_straddlers,
-                  const std::vector<PrimRef>& right_straddlers, NodeEvents& left, NodeEvents& right);
+/// `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along axis a of the
+/// left_only and right_only primitives. `left` and `right` are overwritten (their capacity is
+/// reused).
+void split_events(const NodeEvents& parent, const std::vector<Side>& side, std::span<const PrimRef> left_straddlers,
+                  std::span<const PrimRef> right_straddlers, const std::size_t (&kept_l)[3],
+                  const std::size_t (&kept_r)[3], NodeEvents& left, NodeEvents& right, SplitEventsScratch& scratch);
 
 }  // namespace raylab

@@ -1,5 +1,9 @@
 #include "accel/kdtree/split_clipping.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "geometry/exact_predicates.h"
 #include "geometry/input_error.h"
 #include "geometry/triangle_clipping.h"
@@ -30,7 +34,63 @@ bool ref_meets_box(const Scene& scene, const PrimRef& ref, const Bounds3f& child
   if (mode != ClipMode::exact || scene.is_sphere(ref.prim)) return true;
   const auto& t = scene.mesh.triangles[ref.prim];
   const auto& v = scene.mesh.vertices;
-  return exact_triangle_intersects_box(v[t[0]], v[t[1]], v[t[2]], child);
+  const Vec3f &p0 = v[t[0]], &p1 = v[t[1]], &p2 = v[t[2]];
+  // A vertex in the closed box (decided exactly: float comparisons of floats) is a common point
+  // of the closed triangle, or of the segment or point a degenerate one is tested as.
+  if (child.contains(p0) || child.contains(p1) || child.contains(p2)) return true;
+  return exact_triangle_intersects_box(p0, p1, p2, child);
+}
+
+namespace {
+
+/// Whether an edge of the triangle crosses the plane x_axis = s strictly (one vertex below,
+/// one above, by exact float comparisons) at a point whose other two coordinates lie inside
+/// box's extents by a margin that exceeds the rounding error of computing them. That point is
+/// then a common point of the triangle (or of the segment a degenerate one is tested as) and
+/// of both closed children of box split at s.
+///
+/// The crossing X_b = P_b + (Q_b - P_b)·t, t = (s - P_a)/(Q_a - P_a), is evaluated in double
+/// from float inputs: with t in (0, 1) each of the six operations adds a relative error of at
+/// most 2^-53, so |computed - exact| < 16·2^-53·(|P_b| + |Q_b|); the margin is 1e-12 times that
+/// sum, plus the smallest normal double.
+bool crossing_edge_in_face(const Vec3f* v, int axis, float s, const Bounds3f& box) {
+  const int b1 = axis == 0 ? 1 : 0, b2 = axis == 2 ? 1 : 2;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3f& p = v[i];
+    const Vec3f& q = v[i == 2 ? 0 : i + 1];
+    if (!((p[axis] < s && q[axis] > s) || (p[axis] > s && q[axis] < s))) continue;
+    const double t = (double(s) - p[axis]) / (double(q[axis]) - p[axis]);
+    bool inside = true;
+    for (const int b : {b1, b2}) {
+      const double x = double(p[b]) + (double(q[b]) - p[b]) * t;
+      const double margin =
+          1e-12 * (std::abs(double(p[b])) + std::abs(double(q[b]))) + std::numeric_limits<double>::min();
+      inside = inside && x - margin > box.lo[b] && x + margin < box.hi[b];
+    }
+    if (inside) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+void ref_meets_children(const Scene& scene, const PrimRef& ref, const Bounds3f& box, int axis, float s,
+                        ClipMode mode, bool& in_l, bool& in_r) {
+  Bounds3f lbox = box, rbox = box;
+  lbox.hi[axis] = s;
+  rbox.lo[axis] = s;
+  in_l = ref.box.overlaps(lbox);
+  in_r = ref.box.overlaps(rbox);
+  if (mode != ClipMode::exact || scene.is_sphere(ref.prim) || !(in_l || in_r)) return;
+  const auto& t = scene.mesh.triangles[ref.prim];
+  const auto& vs = scene.mesh.vertices;
+  const Vec3f v[3] = {vs[t[0]], vs[t[1]], vs[t[2]]};
+  if (in_l && in_r && box.lo[axis] <= s && s <= box.hi[axis] && crossing_edge_in_face(v, axis, s, box)) return;
+  // As ref_meets_box: a vertex in the closed child box, or else the exact predicate.
+  if (in_l && !(lbox.contains(v[0]) || lbox.contains(v[1]) || lbox.contains(v[2])))
+    in_l = exact_triangle_intersects_box(v[0], v[1], v[2], lbox);
+  if (in_r && !(rbox.contains(v[0]) || rbox.contains(v[1]) || rbox.contains(v[2])))
+    in_r = exact_triangle_intersects_box(v[0], v[1], v[2], rbox);
 }
 
 Bounds3f ref_bounds_in(const Scene& scene, const PrimRef& ref, const Bounds3f& child, ClipMode mode) {

@@ -41,6 +41,12 @@ std::vector<PrimRef> make_root_refs(const Scene& scene);
 /// Whether `ref` (already in a node) belongs to the closed `child` box of that node.
 bool ref_meets_box(const Scene& scene, const PrimRef& ref, const Bounds3f& child, ClipMode mode);
 
+/// ref_meets_box(ref, lbox) and ref_meets_box(ref, rbox) for the children lbox, rbox of `box`
+/// split at `s` along `axis` (same results), with one more filter before the exact predicate:
+/// an edge crossing the plane well inside the face shared by the children proves both.
+void ref_meets_children(const Scene& scene, const PrimRef& ref, const Bounds3f& box, int axis, float s,
+                        ClipMode mode, bool& in_l, bool& in_r);
+
 /// The bounds of `ref` in `child`, given ref_meets_box: the unchanged bounds for `none`, the
 /// bounds intersected with `child` for `bbox`, the clipped triangle bounds for `exact`.
 Bounds3f ref_bounds_in(const Scene& scene, const PrimRef& ref, const Bounds3f& child, ClipMode mode);
