@@ -1,10 +1,15 @@
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <random>
+
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/tracer.h"
 #include "accel/kdtree/kdtree.h"
+#include "accel/kdtree/sah_sweep_events.h"
 #include "geometry/exact_predicates.h"
+#include "geometry/triangle_clipping.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -39,6 +44,111 @@ std::shared_ptr<const Scene> lattice_scene() {
 KdTreeConfig config_for(const std::string& params) {
   SpecReader r(parse_spec("kdtree" + (params.empty() ? "" : ":" + params)));
   return read_kdtree_config(r);
+}
+
+/// Random and adversarial triangles and boxes: coordinates drawn from a few values that put
+/// vertices and edges on the box faces, edges and corners (and ±0), or drawn at random.
+struct ClipCase {
+  Vec3f p[3];
+  Bounds3f box;
+};
+std::vector<ClipCase> clip_cases(int count) {
+  std::mt19937 rng(12345);
+  const float grid[] = {-1.0f, -0.5f, -0.0f, 0.0f, 0.25f, 0.5f, 0.75f, 1.0f, 1.5f, 0.3f, 1e-7f, 1.0000001f};
+  std::uniform_int_distribution<int> pick(0, 11);
+  std::uniform_real_distribution<float> uni(-1.5f, 2.5f);
+  std::vector<ClipCase> cases;
+  for (int i = 0; i < count; ++i) {
+    ClipCase c;
+    const int mode = i % 3;  // 0: grid, 1: random, 2: mixed
+    auto coord = [&](int m) { return m == 0 || (m == 2 && rng() % 2) ? grid[pick(rng)] : uni(rng); };
+    for (auto& v : c.p) v = {coord(mode), coord(mode), coord(mode)};
+    if (i % 7 == 0) c.p[2] = c.p[1];                                       // degenerate: segment
+    if (i % 11 == 0) c.p[2] = c.p[0] + (c.p[1] - c.p[0]) * 0.5f;           // nearly collinear
+    Vec3f a{coord(0), coord(0), coord(0)}, b{coord(mode), coord(mode), coord(mode)};
+    c.box = Bounds3f(a, b);
+    cases.push_back(c);
+  }
+  return cases;
+}
+
+/// A scene of the cases' triangles, triangle i from case i.
+Scene scene_of(const std::vector<ClipCase>& cases) {
+  Scene scene;
+  for (const ClipCase& c : cases) {
+    const auto b = static_cast<std::uint32_t>(scene.mesh.vertices.size());
+    scene.mesh.vertices.insert(scene.mesh.vertices.end(), {c.p[0], c.p[1], c.p[2]});
+    scene.mesh.triangles.push_back({b, b + 1, b + 2});
+  }
+  return scene;
+}
+
+TEST(KdTree, FilteredExactPlacementEqualsTheExactPredicate) {
+  const std::vector<ClipCase> cases = clip_cases(100000);
+  const Scene scene = scene_of(cases);
+  const std::vector<PrimRef> refs = make_root_refs(scene);
+  std::size_t met = 0;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const ClipCase& c = cases[i];
+    const bool expected =
+        refs[i].box.overlaps(c.box) && exact_triangle_intersects_box(c.p[0], c.p[1], c.p[2], c.box);
+    ASSERT_EQ(ref_meets_box(scene, refs[i], c.box, ClipMode::exact), expected) << i;
+    met += expected;
+  }
+  EXPECT_GT(met, cases.size() / 10);
+  EXPECT_LT(met, cases.size() * 9 / 10);
+}
+
+TEST(KdTree, FilteredChildPlacementEqualsTheExactPredicate) {
+  const std::vector<ClipCase> cases = clip_cases(100000);
+  const Scene scene = scene_of(cases);
+  const std::vector<PrimRef> refs = make_root_refs(scene);
+  std::mt19937 rng(777);
+  std::size_t both = 0;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const ClipCase& c = cases[i];
+    const int axis = static_cast<int>(i % 3);
+    // Split planes through a vertex, through the box middle, or at random inside the box.
+    float s = c.box.lo[axis] + (c.box.hi[axis] - c.box.lo[axis]) * std::uniform_real_distribution<float>(0, 1)(rng);
+    if (i % 4 == 1) s = c.p[i % 3 == 0 ? 1 : 0][axis];
+    if (i % 4 == 2) s = 0.5f * (c.box.lo[axis] + c.box.hi[axis]);
+    if (!(s >= c.box.lo[axis] && s <= c.box.hi[axis])) s = c.box.lo[axis];
+    Bounds3f lbox = c.box, rbox = c.box;
+    lbox.hi[axis] = s;
+    rbox.lo[axis] = s;
+    const bool el = refs[i].box.overlaps(lbox) && exact_triangle_intersects_box(c.p[0], c.p[1], c.p[2], lbox);
+    const bool er = refs[i].box.overlaps(rbox) && exact_triangle_intersects_box(c.p[0], c.p[1], c.p[2], rbox);
+    bool in_l = false, in_r = false;
+    ref_meets_children(scene, refs[i], c.box, axis, s, ClipMode::exact, in_l, in_r);
+    ASSERT_EQ(in_l, el) << i;
+    ASSERT_EQ(in_r, er) << i;
+    both += el && er;
+  }
+  EXPECT_GT(both, cases.size() / 20);
+}
+
+TEST(KdTree, RootEventSortGivesStdSortsKeySequence) {
+  std::mt19937 rng(99);
+  const float values[] = {-2.5f, -1.0f, -1e-30f, 0.0f, 1e-30f, 0.5f, 1.0f, 3.0f, 1e30f, -1e30f};
+  for (int variant = 0; variant < 3; ++variant) {
+    EventVector events;
+    for (std::uint32_t i = 0; i < 50000; ++i) {
+      float pos = variant == 0 ? values[rng() % 10] : std::uniform_real_distribution<float>(-4, 4)(rng);
+      if (variant == 2 && i == 777) pos = -0.0f;  // -0 present: std::sort itself
+      events.push_back(SplitEvent::make(pos, static_cast<SplitEvent::Type>(rng() % 3), i));
+    }
+    EventVector expected = events;
+    std::sort(expected.begin(), expected.end());
+    sort_root_events(events);
+    ASSERT_EQ(events.size(), expected.size());
+    for (std::size_t i = 0; i < events.size(); ++i) {
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(events[i].pos), std::bit_cast<std::uint32_t>(expected[i].pos)) << i;
+      ASSERT_EQ(events[i].type(), expected[i].type()) << i;
+      if (variant == 2) {
+        ASSERT_EQ(events[i].prim(), expected[i].prim()) << i;
+      }
+    }
+  }
 }
 
 TEST(KdTree, SortAndEventSweepsBuildTheSameTree) {
@@ -203,6 +313,57 @@ TEST(KdTree, NodeLinesAndTriangleSoupMatchTheBuiltTree) {
                 tris[i].v2 == scene->mesh.vertices[t[2]]);
   }
   EXPECT_TRUE(make_triangle_soup(*make("sphereflake:depth=1")).empty());
+}
+
+/// The packed leaves hold each leaf's primitives in the leaf's order, ceil(count / 4) packets
+/// from the leaf's new `first`, with the scene's vertices; unused lanes are invalid. Scenes with
+/// spheres are not packed and keep the lines' prim offsets.
+TEST(KdTree, PackedLeavesHoldEachLeafsTrianglesInOrder) {
+  const auto scene = make("soup:n=3000");
+  const KdTreeData data = build_kdtree(*scene, KdTreeConfig{});
+  std::vector<KdNodeLine> lines = kd_node_lines(data.nodes);
+  const std::vector<KdNodeLine> unpacked = lines;
+  const std::vector<TrianglePacket> packets = kd_pack_leaves(*scene, data.prims, lines);
+  std::vector<std::uint32_t> todo = {0};
+  std::size_t leaves = 0, used = 0;
+  while (!todo.empty()) {
+    const std::uint32_t i = todo.back();
+    todo.pop_back();
+    const KdNode& n = lines[i / 8].node[i % 8];
+    const KdNode& m = unpacked[i / 8].node[i % 8];
+    ASSERT_EQ(n.is_leaf(), m.is_leaf());
+    if (!n.is_leaf()) {
+      todo.push_back(n.above_child());
+      todo.push_back(n.above_child() + 1);
+      continue;
+    }
+    ++leaves;
+    ASSERT_EQ(n.count(), m.count());
+    const std::uint32_t np = (n.count() + kPacketWidth - 1) / kPacketWidth;
+    ASSERT_LE(n.first + np, packets.size());
+    used += np;
+    for (std::uint32_t k = 0; k < np * kPacketWidth; ++k) {
+      const TrianglePacket& p = packets[n.first + k / kPacketWidth];
+      const int lane = static_cast<int>(k % kPacketWidth);
+      if (k >= n.count()) {
+        EXPECT_EQ(p.prim[lane], kInvalidId);
+        continue;
+      }
+      const std::uint32_t prim = data.prims[m.first + k];
+      ASSERT_EQ(p.prim[lane], prim);
+      const auto& t = scene->mesh.triangles[prim];
+      for (int v = 0; v < 3; ++v) EXPECT_TRUE(p.vertex(lane, v) == scene->mesh.vertices[t[v]]);
+    }
+  }
+  EXPECT_GT(leaves, 0u);
+  EXPECT_EQ(used, packets.size());
+
+  const auto spheres = make("sphereflake:depth=1");
+  const KdTreeData sdata = build_kdtree(*spheres, KdTreeConfig{});
+  std::vector<KdNodeLine> slines = kd_node_lines(sdata.nodes);
+  EXPECT_TRUE(kd_pack_leaves(*spheres, sdata.prims, slines).empty());
+  for (std::size_t i = 0; i < slines.size(); ++i)
+    for (int k = 0; k < 8; ++k) EXPECT_EQ(slines[i].node[k].first, kd_node_lines(sdata.nodes)[i].node[k].first);
 }
 
 TEST(KdTree, CostParametersShapeTheTree) {

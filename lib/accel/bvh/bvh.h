@@ -100,13 +100,7 @@ class Bvh final : public AggregateBase<Bvh> {
                 }
               continue;
             }
-            if constexpr (Counters::enabled)
-              for (int i = p->size(); i > 0; --i) counters.prim_test();
-            TriangleHit th;
-            const int lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, *p, th);
-            if (lane >= 0) {
-              counters.prim_hit();
-              set_scene_hit(hit, th, p->prim[lane]);
+            if (intersect_triangle_packet<Kernel, kAnyHit>(ctx, packet_ray, *p, p->size(), hit, counters)) {
               found = true;
               if constexpr (kAnyHit) return true;
             }

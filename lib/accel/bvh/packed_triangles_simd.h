@@ -20,6 +20,7 @@
 #include "accel/bvh/packed_triangles.h"
 #include "accel/bvh/simd.h"
 #include "geometry/triangle_kernels.h"
+#include "scene/scene_primitives.h"
 
 namespace raylab {
 
@@ -155,5 +156,21 @@ struct PacketKernel<MollerTrumboreKernel> {
     return best;
   }
 };
+
+/// Offers the `lanes` filled lanes of `packet` to PacketKernel<Kernel>, counted as a scalar loop
+/// would count them (`lanes` tests, at most one hit). On a hit closer than ctx's closest,
+/// writes `hit` with the lane's scene primitive id and returns true.
+template <class Kernel, bool kAnyHit, class Counters>
+inline bool intersect_triangle_packet(typename Kernel::Context& ctx, const typename PacketKernel<Kernel>::Ray& packet_ray,
+                                      const TrianglePacket& packet, int lanes, Hit& hit, Counters& counters) {
+  if constexpr (Counters::enabled)
+    for (int i = lanes; i > 0; --i) counters.prim_test();
+  TriangleHit th;
+  const int lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, packet, th);
+  if (lane < 0) return false;
+  counters.prim_hit();
+  set_scene_hit(hit, th, packet.prim[lane]);
+  return true;
+}
 
 }  // namespace raylab

@@ -8,11 +8,13 @@ KdTree::KdTree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config)
       config_(config),
       data_(build_kdtree(*scene_, config_)),
       tris_(make_triangle_soup(*scene_)),
-      lines_(kd_node_lines(data_.nodes)) {}
+      lines_(kd_node_lines(data_.nodes)),
+      packets_(kd_pack_leaves(*scene_, data_.prims, lines_)) {}
 
 AccelStats KdTree::stats() const {
   return {data_.nodes.size() * sizeof(KdNode) + data_.prims.size() * sizeof(std::uint32_t) +
-              tris_.size() * sizeof(KdTriangle) + lines_.size() * sizeof(KdNodeLine),
+              tris_.size() * sizeof(KdTriangle) + lines_.size() * sizeof(KdNodeLine) +
+              packets_.size() * sizeof(TrianglePacket),
           data_.nodes.size(),
           data_.sah_cost};
 }

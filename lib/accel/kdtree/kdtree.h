@@ -40,7 +40,8 @@ class KdTree final : public AggregateBase<KdTree> {
   template <bool kAnyHit, class Counters>
   bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
     const KdTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds,
-                          tris_.empty() ? nullptr : tris_.data(), lines_.empty() ? nullptr : lines_.front().node};
+                          tris_.empty() ? nullptr : tris_.data(), lines_.empty() ? nullptr : lines_.front().node,
+                          packets_.empty() ? nullptr : packets_.data()};
     using K = WatertightKernel;
     if (config_.traversal == KdTraversal::stack)
       return config_.mailbox ? kd_traverse_lines<K, kAnyHit, true>(view, ray, hit, counters)
@@ -54,6 +55,7 @@ class KdTree final : public AggregateBase<KdTree> {
   KdTreeData data_;
   std::vector<KdTriangle> tris_;   ///< the triangles by primitive id (kdtree_triangle_soup.h)
   std::vector<KdNodeLine> lines_;  ///< data_.nodes in cache lines, for the stack traversal
+  std::vector<TrianglePacket> packets_;  ///< the leaves of lines_ packed 4-wide (kd_pack_leaves)
 };
 
 /// The factory entry: parameters, accuracy bound and oracle variants.
