@@ -13,6 +13,7 @@
 #include "accel/bvh/packed_triangles_simd.h"
 #include "accel/bvh/simd_box_test.h"
 #include "accel/bvh/wide_bvh.h"
+#include "geometry/float_mode.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -366,6 +367,28 @@ TEST(WideBvh, ZeroDirectionComponentOfEitherSignKeepsARayOnTheFace) {
       const unsigned mask = WideBoxRay<8, true>(ray).hit(node, ray.tmax, entry);
       EXPECT_EQ(mask & 1u, 1u) << "SIMD, zero " << (std::signbit(zero) ? "-0" : "+0") << ", face y = " << face;
     }
+}
+
+// Under FTZ/DAZ the inverse of a direction component above 2^126 is a flushed 0, and an empty
+// lane's (±inf - o)·0 is NaN, which the min/max chain would pass as a hit on child 0 (the root):
+// traversal looped until its stack overflowed (found by fuzz_build_trace). Both tests mask it.
+TEST(WideBvh, HugeDirectionComponentsUnderFlushToZeroNeverHitEmptyLanes) {
+  const FloatModeScope tracer_mode(true);
+  WideBvhNode<8> node = {};
+  for (int a = 0; a < 3; ++a) {
+    node.bounds[a][0] = 0.0f;
+    node.bounds[3 + a][0] = 1.0f;
+    for (int i = 1; i < 8; ++i) {
+      node.bounds[a][i] = std::numeric_limits<float>::infinity();
+      node.bounds[3 + a][i] = -std::numeric_limits<float>::infinity();
+    }
+  }
+  node.used = 1;
+  const float huge = 3.0e38f;
+  const Ray ray{{0.5f, 0.5f, -1.0f}, {huge, -huge, huge}, 0.0f, std::numeric_limits<float>::infinity()};
+  alignas(32) float entry[8];
+  EXPECT_EQ((WideBoxRay<8, true>(ray).hit(node, ray.tmax, entry) >> 1), 0u);
+  EXPECT_EQ((WideBoxRay<8, false>(ray).hit(node, ray.tmax, entry) >> 1), 0u);
 }
 
 }  // namespace

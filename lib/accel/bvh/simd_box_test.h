@@ -44,7 +44,9 @@ struct WideBoxRay<N, true> {
       inv[a] = F::broadcast(i[a]);
       near[a] = i[a] >= 0.0f ? a : 3 + a;
       far[a] = i[a] >= 0.0f ? 3 + a : a;
-      finite_inverse = finite_inverse && std::isfinite(i[a]);
+      // Under FTZ, |d| > 2^126 gives a flushed inverse of 0, and (±inf - o)·0 = NaN would keep an
+      // empty lane's t0 at tmin: such rays take the masked path as zero components do.
+      finite_inverse = finite_inverse && std::isfinite(i[a]) && i[a] != 0.0f;
     }
   }
 
@@ -101,7 +103,8 @@ struct WideBoxRay<N, false> {
     }
   }
 
-  /// As the robust test; empty lanes (+inf, -inf) give near = +inf > far and miss.
+  /// As the robust test. Empty lanes (+inf, -inf) give near = +inf > far, except where an
+  /// inverse flushed to 0 (|d| > 2^126 under FTZ) makes them NaN: the result is masked by `used`.
   [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
     const float (*bounds)[N] = node.bounds;
     F t0 = F::broadcast(tmin), t1 = F::broadcast(tmax);
@@ -110,7 +113,7 @@ struct WideBoxRay<N, false> {
       t1 = min(fmsub(F::load(bounds[far[a]]), inv[a], org_inv[a]), t1);
     }
     t0.store(entry);
-    return t0 <= t1;
+    return (t0 <= t1) & ((1u << node.used) - 1);
   }
 };
 
