@@ -115,6 +115,28 @@ TEST(ExactKernel, SphereRootsAreOrderedExactlyAgainstTriangles) {
   EXPECT_EQ(first.hit().prim, 2u);
 }
 
+// Where |d| is far below |o|, o + d rounds to o in double: CGAL's Epick ray through o and
+// o + d is then degenerate (a point), outside its predicates' preconditions, and answered a hit
+// here (found by fuzz_build_trace). The exact kernel takes a second point o + 2^k·d that double
+// holds exactly.
+TEST(ExactKernel, DirectionFarBelowTheOriginDecidesTheTrueRay) {
+  const float tiny = 0x1p-126f;
+  const Vec3f wall_a(0, 1, 0), wall_b(0, 0, 0), wall_c(0, 0, 1);  // in the plane x = 0, z <= 1
+  EXPECT_FALSE(hits<ExactKernel>({{0, 0, 1.0049f}, {0, 0, tiny}, 0.0f, 0.0f}, wall_a, wall_b, wall_c));
+  EXPECT_FALSE(hits<ExactKernel>({{0, 0, 1.0049f}, {0, 0, tiny}}, wall_a, wall_b, wall_c));
+  TriangleHit h;
+  ASSERT_TRUE(hits<ExactKernel>({{0.25f, 0.25f, -1.0f}, {0, 0, tiny}}, P0, P1, P2, &h));
+  EXPECT_EQ(h.t, 0x1p126f);
+
+  const Ray far{{1e6f, 3.0f, 0.0f}, {1e-10f, 1.0f, 0.0f}};
+  Vec3d second;
+  ASSERT_TRUE(exact_second_point(far, second));
+  const double scale = (second.y - 3.0) / 1.0;
+  EXPECT_GT(scale, 0.0);
+  EXPECT_EQ(second.x - 1e6f, double(1e-10f) * scale);  // exact: the point lies on the ray
+  EXPECT_EQ(second.z, 0.0);
+}
+
 TEST(ExactKernel, InvalidRaysNeverHit) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   EXPECT_FALSE(hits<ExactKernel>({{nan, 0, 1}, {0, 0, -1}}, P0, P1, P2));

@@ -7,6 +7,7 @@
 #include <CGAL/intersections.h>
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <variant>
 
@@ -48,9 +49,32 @@ double approximate(const ExactTime& t) {
 
 }  // namespace
 
+bool exact_second_point(const Ray& ray, Vec3d& second) {
+  if (!is_valid(ray)) return false;
+  const FloatModeScope ieee(false);
+  const double dmax = max_component(abs(Vec3d(ray.dir))), omax = max_component(abs(Vec3d(ray.org)));
+  int k0 = 0;
+  if (omax > 0.0) k0 = std::ilogb(omax) - std::ilogb(dmax);
+  for (int step = 0; step <= 128; ++step) {
+    const int k = k0 + (step % 2 == 0 ? step / 2 : -(step + 1) / 2);
+    bool exact = true;
+    for (int a = 0; a < 3 && exact; ++a) {
+      const double o = ray.org[a], e = std::ldexp(double(ray.dir[a]), k);
+      const double s = o + e;
+      // Knuth's TwoSum: the rounding error of o + e, exactly.
+      const double bv = s - o, av = s - bv;
+      exact = std::isfinite(s) && (o - av) + (e - bv) == 0.0;
+      second[a] = s;
+    }
+    if (exact) return true;
+  }
+  return false;
+}
+
 struct ExactFirstHit::Impl {
   Ray ray;
-  Epick::Ray_3 epick_ray;
+  /// The ray through o and exact_second_point, when there is one.
+  std::optional<Epick::Ray_3> epick_ray;
   bool has = false;
   ExactTime best_t;
   double best_t_approx = 0.0;
@@ -61,7 +85,10 @@ struct ExactFirstHit::Impl {
   Sphere best_sphere;
 
   explicit Impl(const Ray& r)
-      : ray(r), epick_ray(to_epick(r.org), Epick::Vector_3(r.dir.x, r.dir.y, r.dir.z)) {}
+      : ray(r) {
+    Vec3d second;
+    if (exact_second_point(r, second)) epick_ray.emplace(to_epick(r.org), Epick::Point_3(second.x, second.y, second.z));
+  }
 
   bool accept(const ExactTime& t, unsigned prim) {
     if (has) {
@@ -89,7 +116,7 @@ bool ExactFirstHit::offer_triangle(unsigned prim, const Vec3f& p0, const Vec3f& 
   const FloatModeScope ieee(false);
   const Epick::Point_3 a = to_epick(p0), b = to_epick(p1), c = to_epick(p2);
   if (CGAL::collinear(a, b, c)) return false;  // CGAL's triangle predicates require non-degenerate input
-  if (!CGAL::do_intersect(s.epick_ray, Epick::Triangle_3(a, b, c))) return false;
+  if (s.epick_ray && !CGAL::do_intersect(*s.epick_ray, Epick::Triangle_3(a, b, c))) return false;
 
   // Exact contact interval [t_enter, t_exit] along the ray (from t = 0).
   const Epeck::Point_3 o = to_epeck(s.ray.org);

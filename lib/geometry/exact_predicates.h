@@ -10,10 +10,19 @@
 
 namespace raylab {
 
+/// A point o + 2^k·d (k an integer) of `ray`, k chosen so that every coordinate is the exact sum
+/// in double: a CGAL Epick ray through o and this point is then exactly the ray, where
+/// Epick::Ray_3(o, d) would round o + d (and make the ray degenerate when |d| is far below |o|,
+/// which CGAL's predicates do not accept). Returns false for an invalid ray and when no k within
+/// ±64 of the one matching the magnitudes of o and d gives exact sums; callers then decide
+/// without an Epick ray.
+bool exact_second_point(const Ray& ray, Vec3d& second);
+
 /// Accumulates, exactly, the first hit along one ray among the primitives offered to it.
 ///
 /// A triangle is hit when the closed triangle meets the ray segment {o + t·d : tmin <= t <= tmax}
-/// (CGAL::do_intersect on Exact_predicates_inexact_constructions_kernel). Its hit parameter is
+/// (CGAL::do_intersect on Exact_predicates_inexact_constructions_kernel, with the ray through o
+/// and exact_second_point; on Exact_predicates_exact_constructions_kernel where there is none). Its hit parameter is
 /// the exact rational t of the first contact point not before tmin (CGAL Epeck constructions;
 /// for a ray lying in the triangle's plane, the entry of the contact segment). A sphere's hit
 /// parameter is the exact algebraic root (CORE::Expr). Offers are ordered by exact t, then by

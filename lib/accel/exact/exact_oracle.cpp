@@ -67,16 +67,21 @@ class ExactOracle final : public AggregateBase<ExactOracle> {
   void offer_all(const Ray& ray, ExactFirstHit& first, Counters& counters) const {
     const FloatModeScope ieee(false);
     if (!triangles_.empty()) {
-      candidates_buffer().clear();
-      const Epick::Ray_3 query(Epick::Point_3(ray.org.x, ray.org.y, ray.org.z),
-                               Epick::Vector_3(ray.dir.x, ray.dir.y, ray.dir.z));
-      tree_.all_intersected_primitives(query, std::back_inserter(candidates_buffer()));
-      for (const auto it : candidates_buffer()) {
-        const unsigned prim = ids_[static_cast<std::size_t>(it - triangles_.cbegin())];
+      auto offer = [&](unsigned prim) {
         counters.prim_test();
         const auto& t = scene_->mesh.triangles[prim];
         const auto& v = scene_->mesh.vertices;
         first.offer_triangle(prim, v[t[0]], v[t[1]], v[t[2]]);
+      };
+      Vec3d second;
+      if (exact_second_point(ray, second)) {
+        candidates_buffer().clear();
+        const Epick::Ray_3 query(Epick::Point_3(ray.org.x, ray.org.y, ray.org.z),
+                                 Epick::Point_3(second.x, second.y, second.z));
+        tree_.all_intersected_primitives(query, std::back_inserter(candidates_buffer()));
+        for (const auto it : candidates_buffer()) offer(ids_[static_cast<std::size_t>(it - triangles_.cbegin())]);
+      } else if (is_valid(ray)) {
+        for (const unsigned prim : ids_) offer(prim);  // no exact Epick ray: every triangle is a candidate
       }
     }
     if (!scene_->spheres.empty()) {
