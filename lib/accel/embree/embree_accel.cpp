@@ -145,6 +145,9 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(root_, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    // Embree's float arithmetic overflows on coordinates near FLT_LARGE and can report a hit at
+    // t = inf, outside [tmin, tmax] (found by fuzz_build_trace): that is no hit.
+    if (!(rh.ray.tfar >= ray.tmin && rh.ray.tfar <= ray.tmax)) return false;
     hit.t = rh.ray.tfar;
     hit.u = rh.hit.u;
     hit.v = rh.hit.v;
