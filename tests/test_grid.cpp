@@ -158,6 +158,35 @@ TEST(GridBuild, CompactStorageAndStats) {
   for (std::size_t c = 0; c < bbox.geometry().cell_count(); ++c) EXPECT_LE(exact.cells().count(c), l.count(c));
 }
 
+// Tall, wide grass blades overlap many cells each at d = 3, so placement counts references with its 3D
+// difference array (grid_placement.cpp); at d = 0.5 it counts them one by one. Either way every
+// cell must hold exactly the primitives whose widened bounding box overlaps it.
+TEST(GridBuild, BboxCellCountsMatchTheCellRangesOfTheBoundingBoxes) {
+  const auto scene = make_scene("grass:blades=2000,height=0.4,width=0.03");
+  for (const double d : {3.0, 0.5}) {
+    GridConfig cfg;
+    cfg.density = d;
+    const UniformGrid grid(scene, cfg);
+    const GridGeometry& g = grid.geometry();
+    const float margin = grid_margin(scene->bounds());
+    std::vector<std::uint32_t> expected(g.cell_count(), 0);
+    for (std::uint32_t p = 0; p < scene->primitive_count(); ++p) {
+      const Bounds3f b = scene->primitive_bounds(p);
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = g.cell_of(a, b.lo[a] - margin);
+        hi[a] = g.cell_of(a, b.hi[a] + margin);
+      }
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i) ++expected[g.index(i, j, k)];
+    }
+    const std::size_t n = scene->primitive_count(), refs = grid.cells().refs.size();
+    EXPECT_EQ(refs > 8 * n + 3 * g.cell_count(), d == 3.0) << "d = " << d << " does not take the intended path";
+    for (std::size_t c = 0; c < g.cell_count(); ++c) ASSERT_EQ(grid.cells().count(c), expected[c]) << "d = " << d << ", cell " << c;
+  }
+}
+
 // The uniform grid's cells reference its copied triangles (cell_triangles.h); mapped back, every
 // cell must list exactly the primitives placement with scene ids puts there, and every copy must
 // be its primitive's triangle.

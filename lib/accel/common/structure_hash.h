@@ -25,8 +25,8 @@ inline std::uint64_t fnv1a(const void* data, std::size_t bytes, std::uint64_t h 
 }
 
 /// Hashes a vector of trivially copyable elements.
-template <class T>
-std::uint64_t fnv1a(const std::vector<T>& v, std::uint64_t h = kFnv1aOffsetBasis) {
+template <class T, class Allocator>
+std::uint64_t fnv1a(const std::vector<T, Allocator>& v, std::uint64_t h = kFnv1aOffsetBasis) {
   return fnv1a(v.data(), v.size() * sizeof(T), h);
 }
 

@@ -1,6 +1,7 @@
 #include "accel/grid/grid_placement.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -85,12 +86,12 @@ void check_ref_count(std::size_t total) {
 /// primitives that share cells get nearby positions. A cell lists its primitives in this order.
 struct OrderedRanges {
   std::vector<std::uint32_t> prims;
-  std::vector<CellRange> ranges;
+  BuildArray<CellRange> ranges;
 };
 
 template <class PrimAt>
 OrderedRanges ordered_ranges(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, float margin) {
-  std::vector<CellRange> by_input(n);
+  BuildArray<CellRange> by_input(n);
   const std::size_t rows = std::size_t(g.res[1]) * std::size_t(g.res[2]);
   std::vector<std::uint32_t> column_start(std::size_t(g.res[0]) + 1, 0), row_start(rows + 1, 0);
   auto row_of = [&](const CellRange& r) { return std::size_t(r.lo[2]) * g.res[1] + r.lo[1]; };
@@ -101,7 +102,7 @@ OrderedRanges ordered_ranges(const Scene& scene, std::size_t n, PrimAt prim_at, 
   }
   for (int i = 0; i < g.res[0]; ++i) column_start[i + 1] += column_start[i];
   for (std::size_t r = 0; r < rows; ++r) row_start[r + 1] += row_start[r];
-  std::vector<std::uint32_t> by_column(n);
+  BuildArray<std::uint32_t> by_column(n);
   for (std::size_t p = 0; p < n; ++p) by_column[column_start[by_input[p].lo[0]]++] = static_cast<std::uint32_t>(p);
   OrderedRanges out;
   out.prims.resize(n);
@@ -127,18 +128,45 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     // Counting sort without a shift pass: counts go to offsets[c], an inclusive prefix sum makes
     // offsets[c] the end of cell c, and filling backwards (last primitive first) leaves it at the
     // start, with every cell's list in visiting order.
+    //
+    // Where references outnumber 8 per primitive plus 3 per cell, the counts come from a 3D
+    // difference array instead of one increment per reference: +1 and -1 at the 8 corners of
+    // each cell range by inclusion-exclusion (corners past the last cell dropped), then prefix
+    // sums along x, y and z. Arithmetic is modulo 2^32, exact for counts below 2^32
+    // (check_ref_count).
     std::uint32_t* cursor = out.offsets.data();
+    auto volume = [](const CellRange& r) {
+      return std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+    };
     std::size_t total = 0;
-    for (const CellRange& r : ordered.ranges) {
-      const CellRange c = r;  // a copy: the counts are ints too, and would alias it
-      for (int k = c.lo[2]; k <= c.hi[2]; ++k)
-        for (int j = c.lo[1]; j <= c.hi[1]; ++j) {
-          std::uint32_t* row = cursor + g.index(0, j, k);
-          for (int i = c.lo[0]; i <= c.hi[0]; ++i) ++row[i];
-        }
-      total += std::size_t(c.hi[0] - c.lo[0] + 1) * std::size_t(c.hi[1] - c.lo[1] + 1) * std::size_t(c.hi[2] - c.lo[2] + 1);
-    }
+    for (const CellRange& r : ordered.ranges) total += volume(r);
     check_ref_count(total);
+    const int nx = g.res[0], ny = g.res[1], nz = g.res[2];
+    if (total > 8 * n + 3 * cells) {
+      for (const CellRange& r : ordered.ranges)
+        for (unsigned corner = 0; corner < 8; ++corner) {
+          const int i = corner & 1u ? r.hi[0] + 1 : r.lo[0];
+          const int j = corner & 2u ? r.hi[1] + 1 : r.lo[1];
+          const int k = corner & 4u ? r.hi[2] + 1 : r.lo[2];
+          if (i == nx || j == ny || k == nz) continue;
+          cursor[g.index(i, j, k)] += std::popcount(corner) % 2 == 0 ? 1u : ~0u;
+        }
+      const std::size_t row_cells = std::size_t(nx), slab_cells = row_cells * std::size_t(ny);
+      for (std::size_t base = 0; base < cells; base += row_cells)
+        for (std::size_t i = 1; i < row_cells; ++i) cursor[base + i] += cursor[base + i - 1];
+      for (std::size_t base = 0; base < cells; base += slab_cells)
+        for (std::size_t c = base + row_cells; c < base + slab_cells; ++c) cursor[c] += cursor[c - row_cells];
+      for (std::size_t c = slab_cells; c < cells; ++c) cursor[c] += cursor[c - slab_cells];
+    } else {
+      for (const CellRange& r : ordered.ranges) {
+        const CellRange c = r;  // a copy: the counts are ints too, and would alias it
+        for (int k = c.lo[2]; k <= c.hi[2]; ++k)
+          for (int j = c.lo[1]; j <= c.hi[1]; ++j) {
+            std::uint32_t* row = cursor + g.index(0, j, k);
+            for (int i = c.lo[0]; i <= c.hi[0]; ++i) ++row[i];
+          }
+      }
+    }
     for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
     out.offsets[cells] = static_cast<std::uint32_t>(total);
     out.refs.resize(total);

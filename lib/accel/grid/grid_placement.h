@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "accel/common/build_array_allocator.h"
 #include "accel/grid/grid_config.h"
 #include "accel/grid/grid_geometry.h"
 #include "scene/scene.h"
@@ -18,8 +19,8 @@ enum class CellRefIds {
 
 /// Cell c holds refs[offsets[c] .. offsets[c+1]).
 struct CellLists {
-  std::vector<std::uint32_t> offsets;      ///< cell_count + 1 entries
-  std::vector<std::uint32_t> refs;         ///< primitive ids, or positions in visit_order
+  BuildArray<std::uint32_t> offsets;       ///< cell_count + 1 entries
+  BuildArray<std::uint32_t> refs;          ///< primitive ids, or positions in visit_order
   std::vector<std::uint32_t> visit_order;  ///< with CellRefIds::visit_order: the primitive ids; else empty
 
   std::uint32_t count(std::size_t c) const { return offsets[c + 1] - offsets[c]; }
