@@ -342,6 +342,21 @@ TEST(WideBvh, AnyHitAgreesWithClosestHitAndWidthsAgreeOnT) {
   }
 }
 
+/// An 8-wide node whose only child (lane 0) is the unit box; lanes 1..7 are empty (+inf, -inf).
+WideBvhNode<8> unit_box_in_lane_0() {
+  WideBvhNode<8> node = {};
+  for (int a = 0; a < 3; ++a) {
+    node.bounds[a][0] = 0.0f;
+    node.bounds[3 + a][0] = 1.0f;
+    for (int i = 1; i < 8; ++i) {
+      node.bounds[a][i] = std::numeric_limits<float>::infinity();
+      node.bounds[3 + a][i] = -std::numeric_limits<float>::infinity();
+    }
+  }
+  node.used = 1;
+  return node;
+}
+
 // A ray parallel to a box face (direction component +0 or -0) whose origin lies on that face
 // touches the closed box: both zeros must keep the slab, in the scalar and the SIMD test.
 TEST(WideBvh, ZeroDirectionComponentOfEitherSignKeepsARayOnTheFace) {
@@ -353,16 +368,7 @@ TEST(WideBvh, ZeroDirectionComponentOfEitherSignKeepsARayOnTheFace) {
       EXPECT_TRUE(intersect_box(box, ray, safe_inverse(ray.dir), ray.tmin, ray.tmax, t0, t1))
           << "zero " << (std::signbit(zero) ? "-0" : "+0") << ", face y = " << face;
       EXPECT_EQ(t0, 1.0f);
-      WideBvhNode<8> node = {};
-      for (int a = 0; a < 3; ++a) {
-        node.bounds[a][0] = 0.0f;
-        node.bounds[3 + a][0] = 1.0f;
-        for (int i = 1; i < 8; ++i) {
-          node.bounds[a][i] = std::numeric_limits<float>::infinity();
-          node.bounds[3 + a][i] = -std::numeric_limits<float>::infinity();
-        }
-      }
-      node.used = 1;
+      const WideBvhNode<8> node = unit_box_in_lane_0();
       alignas(32) float entry[8];
       const unsigned mask = WideBoxRay<8, true>(ray).hit(node, ray.tmax, entry);
       EXPECT_EQ(mask & 1u, 1u) << "SIMD, zero " << (std::signbit(zero) ? "-0" : "+0") << ", face y = " << face;
@@ -374,16 +380,7 @@ TEST(WideBvh, ZeroDirectionComponentOfEitherSignKeepsARayOnTheFace) {
 // traversal looped until its stack overflowed (found by fuzz_build_trace). Both tests mask it.
 TEST(WideBvh, HugeDirectionComponentsUnderFlushToZeroNeverHitEmptyLanes) {
   const FloatModeScope tracer_mode(true);
-  WideBvhNode<8> node = {};
-  for (int a = 0; a < 3; ++a) {
-    node.bounds[a][0] = 0.0f;
-    node.bounds[3 + a][0] = 1.0f;
-    for (int i = 1; i < 8; ++i) {
-      node.bounds[a][i] = std::numeric_limits<float>::infinity();
-      node.bounds[3 + a][i] = -std::numeric_limits<float>::infinity();
-    }
-  }
-  node.used = 1;
+  const WideBvhNode<8> node = unit_box_in_lane_0();
   const float huge = 3.0e38f;
   const Ray ray{{0.5f, 0.5f, -1.0f}, {huge, -huge, huge}, 0.0f, std::numeric_limits<float>::infinity()};
   alignas(32) float entry[8];
