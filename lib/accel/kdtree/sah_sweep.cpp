@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <bit>
 #include <cassert>
+#include <cmath>
 #include <cstring>
 
 #include "accel/kdtree/sah_sweep_events.h"
@@ -41,6 +42,14 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   const SplitEvent* e = events.data();
   const std::size_t m = events.size();
   if (m == 0) return;
+  // Empty-space cut-offs (Wald and Havran 2006 §4.4; Havran's thesis §4.4): every split at an
+  // event's position has both sides non-empty, since a primitive touching the plane meets both
+  // closed children. The planes one float below the first event and one above the last leave
+  // one side empty (no primitive bound reaches it), and only there does the bonus apply.
+  if (const float below = std::nextafter(e[0].pos, lo); e[0].pos > lo && below > lo) {
+    const double c = cost.split(sa, area_with(double(below) - lo), area_with(double(hi) - below), 0, n);
+    if (c < best.cost) best = {A, below, c};
+  }
   // At the last event of each run of equal positions p (p is the first event's position):
   // N(L) = #{lo <= p} = starts and planars so far, N(R) = n - #{hi < p}.
   std::size_t starts_planars = 0, ends_planars = 0, ends_planars_before = 0;
@@ -57,6 +66,10 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
     }
     ends_planars_before = ends_planars;
     if (i + 1 < m) p = e[i + 1].pos;
+  }
+  if (const float above = std::nextafter(e[m - 1].pos, hi); e[m - 1].pos < hi && above < hi) {
+    const double c = cost.split(sa, area_with(double(above) - lo), area_with(double(hi) - above), n, 0);
+    if (c < best.cost) best = {A, above, c};
   }
   best_io = best;
 }
