@@ -33,12 +33,15 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   if (!(lo < hi)) return;
   const double sa = surface_area_d(box);
   if (!(sa > 0.0)) return;
-  // surface_area_d of the children with the split axis' extent substituted, term for term.
+  // surface_area_d of the children with the split axis' extent substituted: linear in that
+  // extent x, 2·(x·(b + c) + b·c) for the other two extents b and c.
   const double d0 = double(box.hi.x) - box.lo.x, d1 = double(box.hi.y) - box.lo.y, d2 = double(box.hi.z) - box.lo.z;
-  auto area_with = [&](double extent) {
-    const double a0 = A == 0 ? extent : d0, a1 = A == 1 ? extent : d1, a2 = A == 2 ? extent : d2;
-    return 2.0 * (a0 * a1 + a1 * a2 + a2 * a0);
-  };
+  const double other0 = A == 0 ? d1 : d0, other1 = A == 2 ? d1 : d2;
+  const double area_at_zero = 2.0 * other0 * other1, area_per_extent = 2.0 * (other0 + other1);
+  auto area_with = [&](double extent) { return area_at_zero + area_per_extent * extent; };
+  // Inside the sweep both sides are non-empty (a primitive touching p counts on both), so the
+  // cost is SahCost::split without the bonus, with the division by sa taken out of the loop.
+  const double isect_per_area = cost.c_isect / sa;
   const SplitEvent* e = events.data();
   const std::size_t m = events.size();
   if (m == 0) return;
@@ -47,8 +50,8 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   // closed children. The planes one float below the first event and one above the last leave
   // one side empty (no primitive bound reaches it), and only there does the bonus apply.
   if (const float below = std::nextafter(e[0].pos, lo); e[0].pos > lo && below > lo) {
-    const double c = cost.split(sa, area_with(double(below) - lo), area_with(double(hi) - below), 0, n);
-    if (c < best.cost) best = {A, below, c};
+    const double cut_cost = cost.split(sa, area_with(double(below) - lo), area_with(double(hi) - below), 0, n);
+    if (cut_cost < best.cost) best = {A, below, cut_cost};
   }
   // At the last event of each run of equal positions p (p is the first event's position):
   // N(L) = #{lo <= p} = starts and planars so far, N(R) = n - #{hi < p}.
@@ -61,15 +64,16 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
     if (i + 1 < m && e[i + 1].pos == p) continue;
     if (p > lo && p < hi) {
       const double sa_l = area_with(double(p) - lo), sa_r = area_with(double(hi) - p);
-      const double c = cost.split(sa, sa_l, sa_r, starts_planars, n - ends_planars_before);
-      if (c < best.cost) best = {A, p, c};
+      const double split_cost = cost.c_trav + isect_per_area * (sa_l * static_cast<double>(starts_planars) +
+                                                                sa_r * static_cast<double>(n - ends_planars_before));
+      if (split_cost < best.cost) best = {A, p, split_cost};
     }
     ends_planars_before = ends_planars;
     if (i + 1 < m) p = e[i + 1].pos;
   }
   if (const float above = std::nextafter(e[m - 1].pos, hi); e[m - 1].pos < hi && above < hi) {
-    const double c = cost.split(sa, area_with(double(above) - lo), area_with(double(hi) - above), n, 0);
-    if (c < best.cost) best = {A, above, c};
+    const double cut_cost = cost.split(sa, area_with(double(above) - lo), area_with(double(hi) - above), n, 0);
+    if (cut_cost < best.cost) best = {A, above, cut_cost};
   }
   best_io = best;
 }
