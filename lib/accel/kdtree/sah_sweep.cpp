@@ -45,7 +45,7 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   const SplitEvent* e = events.data();
   const std::size_t m = events.size();
   if (m == 0) return;
-  // Empty-space cut-offs (Wald and Havran 2006 §4.4; Havran's thesis §4.4): every split at an
+  // Empty-space cut-offs (Wald and Havran 2006; Havran's thesis): every split at an
   // event's position has both sides non-empty, since a primitive touching the plane meets both
   // closed children. The planes one float below the first event and one above the last leave
   // one side empty (no primitive bound reaches it), and only there does the bonus apply.

@@ -5,7 +5,8 @@
 /// lo = hi. Sweeping the events sorted by (position, type) yields at every candidate plane p
 ///   N(L) = #{lo <= p},  N(R) = #{hi >= p}
 /// (a primitive touching p belongs to both closed children), and the SAH cost of each p strictly
-/// inside the node.
+/// inside the node; and the two empty-space cut-offs, one float below the first event and one
+/// above the last, whose empty side earns SahCost's bonus.
 ///
 /// `sweep=sort` (sah_sweep_sort.h) builds and sorts these events anew at every node; `sweep=events`
 /// sorts them once and keeps each child's lists sorted through the splits (splice and merge,
