@@ -131,7 +131,7 @@ TEST(ExactKernel, DirectionFarBelowTheOriginDecidesTheTrueRay) {
   const Ray far{{1e6f, 3.0f, 0.0f}, {1e-10f, 1.0f, 0.0f}};
   Vec3d second;
   ASSERT_TRUE(exact_second_point(far, second));
-  const double scale = (second.y - 3.0) / 1.0;
+  const double scale = second.y - 3.0;  // d.y = 1
   EXPECT_GT(scale, 0.0);
   EXPECT_EQ(second.x - 1e6f, double(1e-10f) * scale);  // exact: the point lies on the ray
   EXPECT_EQ(second.z, 0.0);
