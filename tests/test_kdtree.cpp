@@ -151,6 +151,84 @@ TEST(KdTree, RootEventSortGivesStdSortsKeySequence) {
   }
 }
 
+/// split_events keeps the parent's events only where a child's bounds are unchanged: each child's
+/// lists hold the key sequence of its references' events, sorted anew. Straddlers get bounds
+/// clipped to the child box along the split axis and, for some, shrunk along another axis.
+TEST(KdTree, SplitEventsGiveEachChildTheSortedEventsOfItsReferences) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> coord(0.0f, 8.0f);
+  const Bounds3f box{{0, 0, 0}, {8, 8, 8}};
+  std::size_t straddlers_keeping = 0, straddlers_renewing = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int axis = trial % 3;
+    const float s = std::floor(coord(rng) * 4) / 4;  // on a grid, so that bounds touch the plane
+    std::vector<PrimRef> refs;
+    for (std::uint32_t i = 0; i < 300; ++i) {
+      Bounds3f b;
+      for (int a = 0; a < 3; ++a) {
+        float lo = std::floor(coord(rng) * 4) / 4, hi = std::floor(coord(rng) * 4) / 4;
+        if (lo > hi) std::swap(lo, hi);
+        if (rng() % 8 == 0) hi = lo;  // planar along a
+        b.lo[a] = lo;
+        b.hi[a] = hi;
+      }
+      refs.push_back({b, i});
+    }
+    NodeEvents parent;
+    for (int a = 0; a < 3; ++a) {
+      append_events(refs, a, parent.axis[a]);
+      std::sort(parent.axis[a].begin(), parent.axis[a].end());
+    }
+    std::vector<KeptEvents> kept(refs.size(), 0);
+    std::vector<PrimRef> left, right, left_new, right_new;
+    std::size_t kept_l[3] = {0, 0, 0}, kept_r[3] = {0, 0, 0};
+    auto count = [](const Bounds3f& b, KeptEvents bits, int child, std::size_t(&k)[3]) {
+      for (int a = 0; a < 3; ++a)
+        if ((bits >> (2 * a + child)) & 1u) k[a] += b.lo[a] == b.hi[a] ? 1 : 2;
+    };
+    for (const PrimRef& r : refs) {
+      if (r.box.hi[axis] < s) {
+        left.push_back(r);
+        kept[r.prim] = kKeepAllLower;
+        count(r.box, kKeepAllLower, 0, kept_l);
+      } else if (r.box.lo[axis] > s) {
+        right.push_back(r);
+        kept[r.prim] = kKeepAllUpper;
+        count(r.box, kKeepAllUpper, 1, kept_r);
+      } else {
+        for (int child = 0; child < 2; ++child) {
+          PrimRef c = r;
+          (child == 0 ? c.box.hi[axis] : c.box.lo[axis]) = s;
+          const int other = (axis + 1 + static_cast<int>(rng() % 2)) % 3;
+          if (rng() % 3 == 0) c.box.hi[other] = c.box.lo[other];
+          const KeptEvents bits = kept_events(r.box, c.box, child);
+          (bits == (child == 0 ? kKeepAllLower : kKeepAllUpper) ? straddlers_keeping : straddlers_renewing) += 1;
+          kept[r.prim] |= bits;
+          count(r.box, bits, child, child == 0 ? kept_l : kept_r);
+          (child == 0 ? left : right).push_back(c);
+          (child == 0 ? left_new : right_new).push_back(c);
+        }
+      }
+    }
+    NodeEvents out_l, out_r;
+    SplitEventsScratch scratch;
+    split_events(parent, kept, left_new, right_new, kept_l, kept_r, out_l, out_r, scratch);
+    for (int a = 0; a < 3; ++a)
+      for (const auto& [child_refs, got] : {std::pair{&left, &out_l.axis[a]}, std::pair{&right, &out_r.axis[a]}}) {
+        EventVector expected;
+        append_events(*child_refs, a, expected);
+        std::sort(expected.begin(), expected.end());
+        ASSERT_EQ(got->size(), expected.size()) << "trial " << trial << " axis " << a;
+        for (std::size_t i = 0; i < expected.size(); ++i) {
+          ASSERT_EQ(got->at(i).pos, expected[i].pos) << "trial " << trial << " axis " << a << " event " << i;
+          ASSERT_EQ(got->at(i).type(), expected[i].type()) << "trial " << trial << " axis " << a << " event " << i;
+        }
+      }
+  }
+  EXPECT_GT(straddlers_keeping, 100u);
+  EXPECT_GT(straddlers_renewing, 100u);
+}
+
 TEST(KdTree, SortAndEventSweepsBuildTheSameTree) {
   for (const std::string scene_spec : {"soup:n=2000", "sphere:n=1500", "grass:blades=200", "walls:n=8,angle=30"}) {
     const auto scene = make(scene_spec);

@@ -22,7 +22,7 @@ namespace {
 class KdBuilderImpl {
  public:
   KdBuilderImpl(const Scene& scene, const KdTreeConfig& config, KdTreeData& out)
-      : scene_(scene), config_(config), out_(out), side_(scene.primitive_count(), Side::none) {}
+      : scene_(scene), config_(config), out_(out), kept_(scene.primitive_count(), 0) {}
 
   void build_root(std::vector<PrimRef> refs) {
     max_depth_ = kd_max_depth(config_, refs.size());
@@ -110,6 +110,22 @@ class KdBuilderImpl {
     rbox.lo[a] = s;
 
     Level& next = levels_[static_cast<std::size_t>(depth) + 1];
+    if (split.empty_child >= 0) {
+      // An empty-space cut-off: the references, and their sorted events, pass unchanged to the
+      // other child, as the split below would produce them.
+      const int full = 1 - split.empty_child;
+      next.refs[full].swap(refs);
+      if (events) std::swap(next.events[full], *events);
+      out_.sah_cost += config_.cost.c_trav * area_weight(box);
+      const auto index = static_cast<std::uint32_t>(out_.nodes.size());
+      out_.nodes.push_back(KdNode::make_interior(a, s));
+      if (full == 1) make_leaf({}, lbox, depth + 1);
+      else build(next.refs[0], events ? &next.events[0] : nullptr, lbox, depth + 1);
+      out_.nodes[index].set_above_child(static_cast<std::uint32_t>(out_.nodes.size()));
+      if (full == 0) make_leaf({}, rbox, depth + 1);
+      else build(next.refs[1], events ? &next.events[1] : nullptr, rbox, depth + 1);
+      return;
+    }
     std::vector<PrimRef>& left = next.refs[0];
     std::vector<PrimRef>& right = next.refs[1];
     std::vector<PrimRef>& left_straddlers = left_straddlers_;
@@ -118,26 +134,38 @@ class KdBuilderImpl {
     right.clear();
     left_straddlers.clear();
     right_straddlers.clear();
-    // Events per axis of the one-sided references (one if planar along the axis, else two).
+    // The parent events each child keeps, per axis (one if planar along the axis, else two).
     std::size_t kept_l[3] = {0, 0, 0}, kept_r[3] = {0, 0, 0};
-    auto count_events = [](const PrimRef& r, std::size_t(&k)[3]) {
-      for (int b = 0; b < 3; ++b) k[b] += r.box.lo[b] == r.box.hi[b] ? 1 : 2;
+    auto count_kept = [](const PrimRef& r, KeptEvents bits, int child, std::size_t(&k)[3]) {
+      for (int b = 0; b < 3; ++b)
+        if ((bits >> (2 * b + child)) & 1u) k[b] += r.box.lo[b] == r.box.hi[b] ? 1 : 2;
     };
     for (const PrimRef& r : refs) {
       if (r.box.hi[a] < s) {
         left.push_back(r);
-        side_[r.prim] = Side::left_only;
-        count_events(r, kept_l);
+        kept_[r.prim] = kKeepAllLower;
+        count_kept(r, kKeepAllLower, 0, kept_l);
       } else if (r.box.lo[a] > s) {
         right.push_back(r);
-        side_[r.prim] = Side::right_only;
-        count_events(r, kept_r);
+        kept_[r.prim] = kKeepAllUpper;
+        count_kept(r, kKeepAllUpper, 1, kept_r);
       } else {
         bool in_l, in_r;
         ref_meets_children(scene_, r, box, a, s, config_.clip, in_l, in_r);
-        if (in_l) left_straddlers.push_back({ref_bounds_in(scene_, r, lbox, config_.clip), r.prim});
-        if (in_r) right_straddlers.push_back({ref_bounds_in(scene_, r, rbox, config_.clip), r.prim});
-        side_[r.prim] = in_l && in_r ? Side::both : (in_l ? Side::left_only : (in_r ? Side::right_only : Side::none));
+        KeptEvents bits = 0;
+        if (in_l) {
+          left_straddlers.push_back({ref_bounds_in(scene_, r, lbox, config_.clip), r.prim});
+          const KeptEvents kl = kept_events(r.box, left_straddlers.back().box, 0);
+          count_kept(r, kl, 0, kept_l);
+          bits |= kl;
+        }
+        if (in_r) {
+          right_straddlers.push_back({ref_bounds_in(scene_, r, rbox, config_.clip), r.prim});
+          const KeptEvents kr = kept_events(r.box, right_straddlers.back().box, 1);
+          count_kept(r, kr, 1, kept_r);
+          bits |= kr;
+        }
+        kept_[r.prim] = bits;
       }
     }
     // midpoint and median stop when a split separates nothing.
@@ -146,14 +174,9 @@ class KdBuilderImpl {
       make_leaf(refs, box, depth);
       return;
     }
-    if (events) {
-      // A primitive that lost one side in the exact test is re-clipped like a straddler: its
-      // events come from its new bounds.
-      for (const PrimRef& r : left_straddlers) side_[r.prim] = Side::both;
-      for (const PrimRef& r : right_straddlers) side_[r.prim] = Side::both;
-      split_events(*events, side_, left_straddlers, right_straddlers, kept_l, kept_r, next.events[0], next.events[1],
+    if (events)
+      split_events(*events, kept_, left_straddlers, right_straddlers, kept_l, kept_r, next.events[0], next.events[1],
                    split_scratch_);
-    }
     left.insert(left.end(), left_straddlers.begin(), left_straddlers.end());
     right.insert(right.end(), right_straddlers.begin(), right_straddlers.end());
     // The node's own lists are dead now; large ones are freed (there are few such nodes), so
@@ -174,7 +197,7 @@ class KdBuilderImpl {
   const Scene& scene_;
   const KdTreeConfig& config_;
   KdTreeData& out_;
-  std::vector<Side> side_;
+  std::vector<KeptEvents> kept_;  ///< by primitive id, for split_events
   std::vector<Level> levels_;
   std::vector<PrimRef> left_straddlers_, right_straddlers_;
   SplitEventsScratch split_scratch_;

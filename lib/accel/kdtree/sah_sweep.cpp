@@ -51,7 +51,7 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   // one side empty (no primitive bound reaches it), and only there does the bonus apply.
   if (const float below = std::nextafter(e[0].pos, lo); e[0].pos > lo && below > lo) {
     const double cut_cost = cost.split(sa, area_with(double(below) - lo), area_with(double(hi) - below), 0, n);
-    if (cut_cost < best.cost) best = {A, below, cut_cost};
+    if (cut_cost < best.cost) best = {A, below, cut_cost, 0};
   }
   // At the last event of each run of equal positions p (p is the first event's position):
   // N(L) = #{lo <= p} = starts and planars so far, N(R) = n - #{hi < p}.
@@ -73,7 +73,7 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   }
   if (const float above = std::nextafter(e[m - 1].pos, hi); e[m - 1].pos < hi && above < hi) {
     const double cut_cost = cost.split(sa, area_with(double(above) - lo), area_with(double(hi) - above), n, 0);
-    if (cut_cost < best.cost) best = {A, above, cut_cost};
+    if (cut_cost < best.cost) best = {A, above, cut_cost, 1};
   }
   best_io = best;
 }
@@ -193,17 +193,29 @@ void merge_into(SplitEvent* out, std::size_t k, const EventVector& add) {
 
 }  // namespace
 
-void split_events(const NodeEvents& parent, const std::vector<Side>& side, std::span<const PrimRef> left_straddlers,
-                  std::span<const PrimRef> right_straddlers, const std::size_t (&kept_l)[3],
-                  const std::size_t (&kept_r)[3], NodeEvents& left, NodeEvents& right, SplitEventsScratch& scratch) {
+KeptEvents kept_events(const Bounds3f& in_parent, const Bounds3f& in_child, int child) {
+  KeptEvents bits = 0;
+  for (int a = 0; a < 3; ++a)
+    if (std::bit_cast<std::uint32_t>(in_parent.lo[a]) == std::bit_cast<std::uint32_t>(in_child.lo[a]) &&
+        std::bit_cast<std::uint32_t>(in_parent.hi[a]) == std::bit_cast<std::uint32_t>(in_child.hi[a]))
+      bits |= static_cast<KeptEvents>(1u << (2 * a + child));
+  return bits;
+}
+
+void split_events(const NodeEvents& parent, const std::vector<KeptEvents>& kept, std::span<const PrimRef> left_new,
+                  std::span<const PrimRef> right_new, const std::size_t (&kept_l)[3], const std::size_t (&kept_r)[3],
+                  NodeEvents& left, NodeEvents& right, SplitEventsScratch& scratch) {
   EventVector& new_l = scratch.new_l;
   EventVector& new_r = scratch.new_r;
-  const Side* sd = side.data();
+  const KeptEvents* kp = kept.data();
   for (int a = 0; a < 3; ++a) {
+    const unsigned lower_bit = 2u * static_cast<unsigned>(a), upper_bit = lower_bit + 1u;
     new_l.clear();
     new_r.clear();
-    append_events(left_straddlers, a, new_l);
-    append_events(right_straddlers, a, new_r);
+    for (const PrimRef& r : left_new)
+      if (!((kp[r.prim] >> lower_bit) & 1u)) append_events({&r, 1}, a, new_l);
+    for (const PrimRef& r : right_new)
+      if (!((kp[r.prim] >> upper_bit) & 1u)) append_events({&r, 1}, a, new_r);
     sort_events(new_l);
     sort_events(new_r);
     const EventVector& in = parent.axis[a];
@@ -212,16 +224,16 @@ void split_events(const NodeEvents& parent, const std::vector<Side>& side, std::
     // Room for the child's events, plus one slot that the branchless splice may write past the end.
     out_l.resize(kept_l[a] + new_l.size() + 1);
     out_r.resize(kept_r[a] + new_r.size() + 1);
-    // One pass splices the events of one-sided primitives into both children, in order; then the
-    // straddlers' new events are merged in (as std::merge: at equal keys the parent's event first).
+    // One pass splices the kept events into both children, in order; then the new events are
+    // merged in (as std::merge: at equal keys the parent's event first).
     SplitEvent* pl = out_l.data();
     SplitEvent* pr = out_r.data();
     for (const SplitEvent& e : in) {
-      const Side s = sd[e.prim()];
+      const unsigned k = kp[e.prim()];
       *pl = e;
       *pr = e;
-      pl += s == Side::left_only;
-      pr += s == Side::right_only;
+      pl += (k >> lower_bit) & 1u;
+      pr += (k >> upper_bit) & 1u;
     }
     const auto k_l = static_cast<std::size_t>(pl - out_l.data());
     const auto k_r = static_cast<std::size_t>(pr - out_r.data());

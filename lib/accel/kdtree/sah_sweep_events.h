@@ -69,6 +69,9 @@ struct SplitCandidate {
   int axis = -1;
   float pos = 0.0f;
   double cost = std::numeric_limits<double>::infinity();
+  /// For an empty-space cut-off, the child that no primitive bound reaches (0 lower, 1 upper):
+  /// every reference of the node goes, unchanged, to the other child. -1 for other splits.
+  int empty_child = -1;
   bool valid() const { return axis >= 0; }
 };
 
@@ -91,22 +94,29 @@ void sort_root_events(EventVector& events);
 /// The best split of a node from its presorted events.
 SplitCandidate find_split_events(const NodeEvents& events, const Bounds3f& box, std::size_t n, const SahCost& cost);
 
-/// Which children a primitive of the node being split went to.
-enum class Side : std::uint8_t { left_only, right_only, both, none };
+/// Which of a primitive's events along each axis the children of a split node keep: bit 2·a for
+/// the lower child, bit 2·a + 1 for the upper. A child keeps the parent's events along a when the
+/// primitive is in that child with the same bounds along a (as when it lies on one side, or is
+/// not clipped); otherwise the child gets the events of the primitive's new bounds, if it holds it.
+using KeptEvents = std::uint8_t;
+inline constexpr KeptEvents kKeepAllLower = 0x15, kKeepAllUpper = 0x2a;
+
+/// The bits of KeptEvents for a primitive in a child (0 lower, 1 upper) with bounds `in_child`
+/// there and `in_parent` in the parent: set along the axes where the two are bitwise equal.
+KeptEvents kept_events(const Bounds3f& in_parent, const Bounds3f& in_child, int child);
 
 /// Working storage of split_events, kept across calls so that nodes do not allocate.
 struct SplitEventsScratch {
   EventVector new_l, new_r;
 };
 
-/// The children's sorted event lists: events of primitives on one side only are spliced in
-/// order; primitives in both children got new (clipped) bounds in `left_straddlers` and
-/// `right_straddlers`, whose events are sorted and merged in. `side` is indexed by primitive id.
-/// `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along axis a of the
-/// left_only and right_only primitives. `left` and `right` are overwritten (their capacity is
-/// reused).
-void split_events(const NodeEvents& parent, const std::vector<Side>& side, std::span<const PrimRef> left_straddlers,
-                  std::span<const PrimRef> right_straddlers, const std::size_t (&kept_l)[3],
-                  const std::size_t (&kept_r)[3], NodeEvents& left, NodeEvents& right, SplitEventsScratch& scratch);
+/// The children's sorted event lists: the parent's events that a child keeps (`kept`, indexed by
+/// primitive id) are spliced in order; the events of `left_new` and `right_new` (the references
+/// of the primitives with new bounds in a child) along the axes their child does not keep are
+/// sorted and merged in. `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along
+/// axis a that each child keeps. `left` and `right` are overwritten (their capacity is reused).
+void split_events(const NodeEvents& parent, const std::vector<KeptEvents>& kept, std::span<const PrimRef> left_new,
+                  std::span<const PrimRef> right_new, const std::size_t (&kept_l)[3], const std::size_t (&kept_r)[3],
+                  NodeEvents& left, NodeEvents& right, SplitEventsScratch& scratch);
 
 }  // namespace raylab
