@@ -19,6 +19,7 @@ int bsp_max_depth(const BspConfig& config, std::size_t n) {
 namespace {
 
 constexpr std::size_t kCountSample = 1024;
+constexpr float kMinEmptySlab = 1e-5f;
 
 class BspBuilder {
  public:
@@ -99,19 +100,50 @@ class BspBuilder {
       for (int j = 1; j <= q; ++j) {
         const std::size_t k = std::min(n - 1, n * static_cast<std::size_t>(j) / static_cast<std::size_t>(q + 1));
         std::nth_element(centres.begin(), centres.begin() + static_cast<std::ptrdiff_t>(k), centres.end());
-        BspPlane p;
-        p.axis = a;
-        p.pos = centres[k];
-        p.normal = Vec3d(0.0);
-        p.normal[a] = 1.0;
-        p.origin = Vec3d(0.0);
-        p.origin[a] = p.pos;
-        p.offset = p.pos;
-        p.scale = 1.0;
-        planes.push_back(p);
+        planes.push_back(axis_plane(a, centres[k]));
       }
     }
     return planes;
+  }
+
+  static BspPlane axis_plane(int axis, float pos) {
+    BspPlane p;
+    p.axis = axis;
+    p.pos = pos;
+    p.normal = Vec3d(0.0);
+    p.normal[axis] = 1.0;
+    p.origin = Vec3d(0.0);
+    p.origin[axis] = pos;
+    p.offset = pos;
+    p.scale = 1.0;
+    return p;
+  }
+
+  /// An axis plane one float outside the bounds of all the node's primitives: one side holds
+  /// none of them, and only such a split earns SahCost's empty-space bonus (the centre candidates
+  /// always leave primitives on both sides). The empty slab must be wider than kMinEmptySlab
+  /// relative to its coordinates: cell boxes are rounded outward, and a slab of a few ulps
+  /// could otherwise be cut off again and again.
+  struct EmptySpaceCut {
+    BspPlane plane;
+    bool negative_empty;
+  };
+
+  std::vector<EmptySpaceCut> empty_space_cuts(const std::vector<std::uint32_t>& refs, const Bounds3f& cell_box) const {
+    Bounds3f used;
+    for (std::uint32_t p : refs) used.extend(bounds_[p]);
+    std::vector<EmptySpaceCut> cuts;
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    auto wide = [](float from, float to) {
+      return to - from > kMinEmptySlab * (std::abs(from) + std::abs(to));
+    };
+    for (int a = 0; a < 3; ++a) {
+      if (const float below = std::nextafter(used.lo[a], -kInf); wide(cell_box.lo[a], below) && below < cell_box.hi[a])
+        cuts.push_back({axis_plane(a, below), true});
+      if (const float above = std::nextafter(used.hi[a], kInf); wide(above, cell_box.hi[a]) && above > cell_box.lo[a])
+        cuts.push_back({axis_plane(a, above), false});
+    }
+    return cuts;
   }
 
   void build(std::vector<std::uint32_t>& refs, const ConvexCell& cell, int depth) {
@@ -144,6 +176,19 @@ class BspBuilder {
       if (c < best_cost) {
         best_cost = c;
         best = p;
+        std::swap(best_neg, neg);
+        std::swap(best_pos, pos);
+      }
+    }
+    // No primitive reaches a cut's empty side: its counts are known, not estimated.
+    for (const EmptySpaceCut& cut : empty_space_cuts(refs, cell.bounds())) {
+      cell.split(cut.plane, neg, pos);
+      if (neg.empty() || pos.empty()) continue;
+      const double c = config_.cost.split(sa, neg.surface_area(), pos.surface_area(), cut.negative_empty ? 0 : n,
+                                          cut.negative_empty ? n : 0);
+      if (c < best_cost) {
+        best_cost = c;
+        best = cut.plane;
         std::swap(best_neg, neg);
         std::swap(best_pos, pos);
       }
