@@ -72,6 +72,54 @@ float round_up(double x) {
   return static_cast<double>(f) < x ? g : f;
 }
 
+ClipPolygon triangle_polygon(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2) {
+  ClipPolygon a;
+  for (const Vec3f& p : {p0, p1, p2}) {
+    a.p[a.n][0] = p.x;
+    a.p[a.n][1] = p.y;
+    a.p[a.n][2] = p.z;
+    a.exact[a.n++] = 7u;
+  }
+  return a;
+}
+
+/// Clips poly[cur] to the six slabs of `box`, leaving the result in poly[cur]; false when it
+/// vanishes in double precision.
+bool clip_to_box(ClipPolygon (&poly)[2], int& cur, const Bounds3f& box) {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (clip_polygon(poly[cur], axis, box.lo[axis], 1.0, poly[cur ^ 1])) cur ^= 1;
+    if (clip_polygon(poly[cur], axis, box.hi[axis], -1.0, poly[cur ^ 1])) cur ^= 1;
+    if (poly[cur].n == 0) return false;
+  }
+  return true;
+}
+
+/// The clipped polygon's bounds, widened and rounded outward, intersected with `fallback` (the
+/// triangle's bounds intersected with the box clipped to).
+Bounds3f polygon_bounds(const ClipPolygon& a, const Bounds3f& box, const Bounds3f& tri, const Bounds3f& fallback) {
+  // Each computed coordinate is a convex combination evaluated in double after at most seven
+  // clips; 1e-12 of the magnitude of the coordinates bounds its error with a wide margin.
+  const double scale = std::max(max_component(abs(Vec3d(box.lo))), max_component(abs(Vec3d(box.hi))));
+  const double scale_tri = std::max(max_component(abs(Vec3d(tri.lo))), max_component(abs(Vec3d(tri.hi))));
+  const double margin = 1e-12 * (std::max(scale, scale_tri) + std::numeric_limits<double>::min());
+  // round_down and round_up are monotone: rounding the extremes equals the extremes of the
+  // rounded coordinates.
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (int i = 0; i < a.n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const double x = a.p[i][k];
+      const double m = (a.exact[i] >> k & 1u) ? 0.0 : margin;
+      lo[k] = std::min(lo[k], x - m);
+      hi[k] = std::max(hi[k], x + m);
+    }
+  Bounds3f r;
+  for (int k = 0; k < 3; ++k) {
+    r.lo[k] = round_down(lo[k]);
+    r.hi[k] = round_up(hi[k]);
+  }
+  return intersect(r, fallback);
+}
+
 }  // namespace
 
 Bounds3f clipped_triangle_bounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box) {
@@ -80,36 +128,38 @@ Bounds3f clipped_triangle_bounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& 
   const Bounds3f fallback = intersect(tri, box);
   // Entirely inside: nothing to clip, the bounds are exact.
   if (box.contains(tri.lo) && box.contains(tri.hi)) return tri;
-
-  ClipPolygon poly[2];
+  ClipPolygon poly[2] = {triangle_polygon(p0, p1, p2), {}};
   int cur = 0;
-  for (const Vec3f& p : {p0, p1, p2}) {
-    ClipPolygon& a = poly[0];
-    a.p[a.n][0] = p.x;
-    a.p[a.n][1] = p.y;
-    a.p[a.n][2] = p.z;
-    a.exact[a.n++] = 7u;
+  if (!clip_to_box(poly, cur, box)) return fallback;
+  return polygon_bounds(poly[cur], box, tri, fallback);
+}
+
+void clipped_triangle_bounds_split(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box, int axis,
+                                   float pos, Bounds3f& lower, Bounds3f& upper) {
+  Bounds3f tri(p0, p1);
+  tri.extend(p2);
+  Bounds3f lower_box = box, upper_box = box;
+  lower_box.hi[axis] = pos;
+  upper_box.lo[axis] = pos;
+  const Bounds3f lower_fallback = intersect(tri, lower_box), upper_fallback = intersect(tri, upper_box);
+  const bool in_lower = lower_box.contains(tri.lo) && lower_box.contains(tri.hi);
+  const bool in_upper = upper_box.contains(tri.lo) && upper_box.contains(tri.hi);
+  ClipPolygon poly[2] = {triangle_polygon(p0, p1, p2), {}};
+  int cur = 0;
+  if (!(in_lower || in_upper) && !clip_to_box(poly, cur, box)) {
+    lower = lower_fallback;
+    upper = upper_fallback;
+    return;
   }
-  for (int axis = 0; axis < 3; ++axis) {
-    if (clip_polygon(poly[cur], axis, box.lo[axis], 1.0, poly[cur ^ 1])) cur ^= 1;
-    if (clip_polygon(poly[cur], axis, box.hi[axis], -1.0, poly[cur ^ 1])) cur ^= 1;
-    if (poly[cur].n == 0) return fallback;
-  }
-  // Each computed coordinate is a convex combination evaluated in double after at most six
-  // clips; 1e-12 of the magnitude of the coordinates bounds its error with a wide margin.
-  const ClipPolygon& a = poly[cur];
-  const double scale = std::max(max_component(abs(Vec3d(box.lo))), max_component(abs(Vec3d(box.hi))));
-  const double scale_tri = std::max(max_component(abs(Vec3d(tri.lo))), max_component(abs(Vec3d(tri.hi))));
-  const double margin = 1e-12 * (std::max(scale, scale_tri) + std::numeric_limits<double>::min());
-  Bounds3f r;
-  for (int i = 0; i < a.n; ++i)
-    for (int k = 0; k < 3; ++k) {
-      const double x = a.p[i][k];
-      const double m = (a.exact[i] >> k & 1u) ? 0.0 : margin;
-      r.lo[k] = std::min(r.lo[k], round_down(x - m));
-      r.hi[k] = std::max(r.hi[k], round_up(x + m));
-    }
-  return intersect(r, fallback);
+  ClipPolygon half;
+  auto side = [&](bool inside, double sign, const Bounds3f& child, const Bounds3f& fallback) {
+    if (inside) return tri;  // entirely in the child: exact
+    const ClipPolygon* a = &poly[cur];
+    if (clip_polygon(poly[cur], axis, pos, sign, half)) a = &half;
+    return a->n == 0 ? fallback : polygon_bounds(*a, child, tri, fallback);
+  };
+  lower = side(in_lower, -1.0, lower_box, lower_fallback);
+  upper = side(in_upper, 1.0, upper_box, upper_fallback);
 }
 
 }  // namespace raylab

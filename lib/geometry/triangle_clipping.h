@@ -18,4 +18,11 @@ namespace raylab {
 /// may then be empty when the triangle misses the box.
 Bounds3f clipped_triangle_bounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box);
 
+/// clipped_triangle_bounds for both children of `box` split at `pos` along `axis`: `lower` for
+/// the box with hi[axis] = pos, `upper` for the box with lo[axis] = pos. The triangle is clipped
+/// to `box` once and that polygon by the split plane, so each result carries the same guarantee
+/// (it contains triangle ∩ child and lies in the child) without clipping twice.
+void clipped_triangle_bounds_split(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box, int axis,
+                                   float pos, Bounds3f& lower, Bounds3f& upper);
+
 }  // namespace raylab

@@ -152,16 +152,23 @@ class KdBuilderImpl {
       } else {
         bool in_l, in_r;
         ref_meets_children(scene_, r, box, a, s, config_.clip, in_l, in_r);
+        Bounds3f in_lbox, in_rbox;
+        if (in_l && in_r)
+          ref_bounds_in_children(scene_, r, box, a, s, config_.clip, in_lbox, in_rbox);
+        else if (in_l)
+          in_lbox = ref_bounds_in(scene_, r, lbox, config_.clip);
+        else if (in_r)
+          in_rbox = ref_bounds_in(scene_, r, rbox, config_.clip);
         KeptEvents bits = 0;
         if (in_l) {
-          left_straddlers.push_back({ref_bounds_in(scene_, r, lbox, config_.clip), r.prim});
-          const KeptEvents kl = kept_events(r.box, left_straddlers.back().box, 0);
+          left_straddlers.push_back({in_lbox, r.prim});
+          const KeptEvents kl = kept_events(r.box, in_lbox, 0);
           count_kept(r, kl, 0, kept_l);
           bits |= kl;
         }
         if (in_r) {
-          right_straddlers.push_back({ref_bounds_in(scene_, r, rbox, config_.clip), r.prim});
-          const KeptEvents kr = kept_events(r.box, right_straddlers.back().box, 1);
+          right_straddlers.push_back({in_rbox, r.prim});
+          const KeptEvents kr = kept_events(r.box, in_rbox, 1);
           count_kept(r, kr, 1, kept_r);
           bits |= kr;
         }

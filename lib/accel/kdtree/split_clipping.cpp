@@ -108,4 +108,26 @@ Bounds3f ref_bounds_in(const Scene& scene, const PrimRef& ref, const Bounds3f& c
   return b.empty() ? intersect(ref.box, child) : b;
 }
 
+void ref_bounds_in_children(const Scene& scene, const PrimRef& ref, const Bounds3f& box, int axis, float s,
+                            ClipMode mode, Bounds3f& lower, Bounds3f& upper) {
+  Bounds3f lower_box = box, upper_box = box;
+  lower_box.hi[axis] = s;
+  upper_box.lo[axis] = s;
+  if (mode != ClipMode::exact || scene.is_sphere(ref.prim)) {
+    lower = ref_bounds_in(scene, ref, lower_box, mode);
+    upper = ref_bounds_in(scene, ref, upper_box, mode);
+    return;
+  }
+  const auto& t = scene.mesh.triangles[ref.prim];
+  const auto& v = scene.mesh.vertices;
+  Bounds3f l, u;
+  clipped_triangle_bounds_split(v[t[0]], v[t[1]], v[t[2]], box, axis, s, l, u);
+  // As in ref_bounds_in: rounding may leave a clipped box empty; the box intersection stays
+  // conservative.
+  l = intersect(l, ref.box);
+  u = intersect(u, ref.box);
+  lower = l.empty() ? intersect(ref.box, lower_box) : l;
+  upper = u.empty() ? intersect(ref.box, upper_box) : u;
+}
+
 }  // namespace raylab

@@ -51,4 +51,9 @@ void ref_meets_children(const Scene& scene, const PrimRef& ref, const Bounds3f& 
 /// bounds intersected with `child` for `bbox`, the clipped triangle bounds for `exact`.
 Bounds3f ref_bounds_in(const Scene& scene, const PrimRef& ref, const Bounds3f& child, ClipMode mode);
 
+/// ref_bounds_in for both children of `box` split at `s` along `axis`, for a reference that
+/// meets both; for `exact`, a triangle is clipped to `box` once (clipped_triangle_bounds_split).
+void ref_bounds_in_children(const Scene& scene, const PrimRef& ref, const Bounds3f& box, int axis, float s,
+                            ClipMode mode, Bounds3f& lower, Bounds3f& upper);
+
 }  // namespace raylab
