@@ -41,7 +41,22 @@ inline std::vector<TrianglePacket> kd_pack_leaves(const Scene& scene, const std:
   std::vector<TrianglePacket> out;
   if (!scene.spheres.empty() || lines.empty()) return out;
   KdNode* nodes = lines.front().node;
+  // Sized before packing (every primitive is a triangle here): growing by doubling would copy
+  // the packets and touch about twice their memory.
+  std::size_t packets = 0;
   std::vector<std::uint32_t> todo = {0};
+  while (!todo.empty()) {
+    const KdNode& n = nodes[todo.back()];
+    todo.pop_back();
+    if (n.is_leaf()) {
+      packets += (n.count() + kPacketWidth - 1) / kPacketWidth;
+    } else {
+      todo.push_back(n.above_child() + 1);
+      todo.push_back(n.above_child());
+    }
+  }
+  out.reserve(packets);
+  todo = {0};
   while (!todo.empty()) {
     KdNode& n = nodes[todo.back()];
     todo.pop_back();
