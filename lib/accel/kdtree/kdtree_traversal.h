@@ -32,6 +32,8 @@
 namespace raylab {
 
 inline constexpr float kKdPlaneSlack = 1e-6f;
+/// KdNode::bits of a leaf with no primitives.
+inline constexpr std::uint32_t kKdEmptyLeafBits = 3u;
 
 /// The arrays traversal reads.
 struct KdTreeView {
@@ -215,9 +217,18 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
       } else if (t_hi < tmin) {  // t* < tmin
         index = far;
       } else {  // tmin <= t* <= tmax (NaN: both, whole)
-        stack[top++] = {far, t_lo > tmin ? t_lo : tmin, tmax};
-        index = near;
-        tmax = t_hi < tmax ? t_hi : tmax;
+        // An empty leaf (an empty-space cut-off's child) is not visited: an empty near child
+        // hands the ray to the far one, an empty far child is not pushed.
+        const float far_tmin = t_lo > tmin ? t_lo : tmin;
+        if (tree.lines[near].bits == kKdEmptyLeafBits) {
+          index = far;
+          tmin = far_tmin;
+        } else {
+          stack[top] = {far, far_tmin, tmax};
+          top += tree.lines[far].bits != kKdEmptyLeafBits;
+          index = near;
+          tmax = t_hi < tmax ? t_hi : tmax;
+        }
       }
       node = &tree.lines[index];
     }
