@@ -41,34 +41,30 @@ inline std::vector<TrianglePacket> kd_pack_leaves(const Scene& scene, const std:
   std::vector<TrianglePacket> out;
   if (!scene.spheres.empty() || lines.empty()) return out;
   KdNode* nodes = lines.front().node;
+  // Leaves in depth-first order, lower child first.
+  auto for_each_leaf = [&](auto&& f) {
+    std::vector<std::uint32_t> todo = {0};
+    while (!todo.empty()) {
+      KdNode& n = nodes[todo.back()];
+      todo.pop_back();
+      if (n.is_leaf()) {
+        f(n);
+      } else {
+        todo.push_back(n.above_child() + 1);
+        todo.push_back(n.above_child());
+      }
+    }
+  };
   // Sized before packing (every primitive is a triangle here): growing by doubling would copy
   // the packets and touch about twice their memory.
   std::size_t packets = 0;
-  std::vector<std::uint32_t> todo = {0};
-  while (!todo.empty()) {
-    const KdNode& n = nodes[todo.back()];
-    todo.pop_back();
-    if (n.is_leaf()) {
-      packets += (n.count() + kPacketWidth - 1) / kPacketWidth;
-    } else {
-      todo.push_back(n.above_child() + 1);
-      todo.push_back(n.above_child());
-    }
-  }
+  for_each_leaf([&](const KdNode& n) { packets += (n.count() + kPacketWidth - 1) / kPacketWidth; });
   out.reserve(packets);
-  todo = {0};
-  while (!todo.empty()) {
-    KdNode& n = nodes[todo.back()];
-    todo.pop_back();
-    if (!n.is_leaf()) {
-      todo.push_back(n.above_child() + 1);
-      todo.push_back(n.above_child());
-      continue;
-    }
+  for_each_leaf([&](KdNode& n) {
     const auto first = static_cast<std::uint32_t>(out.size());
     pack_leaf(scene, std::span<const std::uint32_t>(prims.data() + n.first, n.count()), out);
     n.first = first;
-  }
+  });
   return out;
 }
 
