@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "accel/bsp/bsp_cell.h"
 #include "accel/bsp/bsp_plane.h"
@@ -119,16 +120,16 @@ class BspBuilder {
     return p;
   }
 
-  /// An axis plane one float outside the bounds of all the node's primitives: one side holds
-  /// none of them, and only such a split earns SahCost's empty-space bonus (the centre candidates
+  struct EmptySpaceCut {
+    BspPlane plane;
+    bool negative_empty;  ///< which side holds no primitive
+  };
+
+  /// Axis planes one float outside the bounds of all the node's primitives: one side holds none
+  /// of them, and only such a split earns SahCost's empty-space bonus (the centre candidates
   /// always leave primitives on both sides). The empty slab must be wider than kMinEmptySlab
   /// relative to its coordinates: cell boxes are rounded outward, and a slab of a few ulps
   /// could otherwise be cut off again and again.
-  struct EmptySpaceCut {
-    BspPlane plane;
-    bool negative_empty;
-  };
-
   std::vector<EmptySpaceCut> empty_space_cuts(const std::vector<std::uint32_t>& refs, const Bounds3f& cell_box) const {
     Bounds3f used;
     for (std::uint32_t p : refs) used.extend(bounds_[p]);
@@ -165,13 +166,11 @@ class BspBuilder {
       sample = &sampled;
     }
     const double scale = static_cast<double>(n) / static_cast<double>(sample->size());
-    for (const BspPlane& p : candidates(refs)) {
+    // Keeps the split of `cell` by `p` when it costs less; the counts are a function of its cells.
+    auto consider = [&](const BspPlane& p, auto&& side_counts) {
       cell.split(p, neg, pos);
-      if (neg.empty() || pos.empty()) continue;
-      std::size_t s_neg, s_pos;
-      count(*sample, p, neg.bounds(), pos.bounds(), s_neg, s_pos);
-      const auto n_neg = static_cast<std::size_t>(std::llround(static_cast<double>(s_neg) * scale));
-      const auto n_pos = static_cast<std::size_t>(std::llround(static_cast<double>(s_pos) * scale));
+      if (neg.empty() || pos.empty()) return;
+      const auto [n_neg, n_pos] = side_counts();
       const double c = config_.cost.split(sa, neg.surface_area(), pos.surface_area(), n_neg, n_pos);
       if (c < best_cost) {
         best_cost = c;
@@ -179,20 +178,17 @@ class BspBuilder {
         std::swap(best_neg, neg);
         std::swap(best_pos, pos);
       }
-    }
+    };
+    for (const BspPlane& p : candidates(refs))
+      consider(p, [&] {
+        std::size_t s_neg, s_pos;
+        count(*sample, p, neg.bounds(), pos.bounds(), s_neg, s_pos);
+        return std::pair{static_cast<std::size_t>(std::llround(static_cast<double>(s_neg) * scale)),
+                         static_cast<std::size_t>(std::llround(static_cast<double>(s_pos) * scale))};
+      });
     // No primitive reaches a cut's empty side: its counts are known, not estimated.
-    for (const EmptySpaceCut& cut : empty_space_cuts(refs, cell.bounds())) {
-      cell.split(cut.plane, neg, pos);
-      if (neg.empty() || pos.empty()) continue;
-      const double c = config_.cost.split(sa, neg.surface_area(), pos.surface_area(), cut.negative_empty ? 0 : n,
-                                          cut.negative_empty ? n : 0);
-      if (c < best_cost) {
-        best_cost = c;
-        best = cut.plane;
-        std::swap(best_neg, neg);
-        std::swap(best_pos, pos);
-      }
-    }
+    for (const EmptySpaceCut& cut : empty_space_cuts(refs, cell.bounds()))
+      consider(cut.plane, [&] { return cut.negative_empty ? std::pair{std::size_t{0}, n} : std::pair{n, std::size_t{0}}; });
     if (!(best_cost < config_.cost.leaf(n))) {
       make_leaf(refs, sa, depth);
       return;
