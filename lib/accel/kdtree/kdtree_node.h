@@ -28,6 +28,7 @@ struct KdNode {
   void set_above_child(std::uint32_t index) { bits = (bits & 3u) | (index << 2); }
 
   bool is_leaf() const { return (bits & 3u) == 3u; }
+  bool is_empty_leaf() const { return bits == 3u; }
   int axis() const { return static_cast<int>(bits & 3u); }
   std::uint32_t count() const { return bits >> 2; }
   std::uint32_t above_child() const { return bits >> 2; }

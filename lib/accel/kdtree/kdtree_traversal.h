@@ -32,8 +32,6 @@
 namespace raylab {
 
 inline constexpr float kKdPlaneSlack = 1e-6f;
-/// KdNode::bits of a leaf with no primitives.
-inline constexpr std::uint32_t kKdEmptyLeafBits = 3u;
 
 /// The arrays traversal reads.
 struct KdTreeView {
@@ -220,12 +218,12 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
         // An empty leaf (an empty-space cut-off's child) is not visited: an empty near child
         // hands the ray to the far one, an empty far child is not pushed.
         const float far_tmin = t_lo > tmin ? t_lo : tmin;
-        if (tree.lines[near].bits == kKdEmptyLeafBits) {
+        if (tree.lines[near].is_empty_leaf()) {
           index = far;
           tmin = far_tmin;
         } else {
           stack[top] = {far, far_tmin, tmax};
-          top += tree.lines[far].bits != kKdEmptyLeafBits;
+          top += !tree.lines[far].is_empty_leaf();
           index = near;
           tmax = t_hi < tmax ? t_hi : tmax;
         }
