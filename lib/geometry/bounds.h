@@ -29,6 +29,17 @@ struct Bounds3 {
   bool contains(const Vec3<T>& p) const {
     return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
   }
+  /// The lower and upper parts of a split at `pos` along `axis`: hi[axis] or lo[axis] becomes pos.
+  Bounds3 below(int axis, T pos) const {
+    Bounds3 b = *this;
+    b.hi[axis] = pos;
+    return b;
+  }
+  Bounds3 above(int axis, T pos) const {
+    Bounds3 b = *this;
+    b.lo[axis] = pos;
+    return b;
+  }
   bool overlaps(const Bounds3& b) const {
     return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z && b.lo.z <= hi.z;
   }

@@ -138,9 +138,7 @@ void clipped_triangle_bounds_split(const Vec3f& p0, const Vec3f& p1, const Vec3f
                                    float pos, Bounds3f& lower, Bounds3f& upper) {
   Bounds3f tri(p0, p1);
   tri.extend(p2);
-  Bounds3f lower_box = box, upper_box = box;
-  lower_box.hi[axis] = pos;
-  upper_box.lo[axis] = pos;
+  const Bounds3f lower_box = box.below(axis, pos), upper_box = box.above(axis, pos);
   const Bounds3f lower_fallback = intersect(tri, lower_box), upper_fallback = intersect(tri, upper_box);
   const bool in_lower = lower_box.contains(tri.lo) && lower_box.contains(tri.hi);
   const bool in_upper = upper_box.contains(tri.lo) && upper_box.contains(tri.hi);

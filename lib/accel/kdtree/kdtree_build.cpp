@@ -105,9 +105,7 @@ class KdBuilderImpl {
     }
     const int a = split.axis;
     const float s = split.pos;
-    Bounds3f lbox = box, rbox = box;
-    lbox.hi[a] = s;
-    rbox.lo[a] = s;
+    const Bounds3f lbox = box.below(a, s), rbox = box.above(a, s);
 
     Level& next = levels_[static_cast<std::size_t>(depth) + 1];
     if (split.empty_child >= 0) {

@@ -40,11 +40,8 @@ void for_each_kd_leaf(const KdTreeData& data, F&& f) {
       f(it.box, n.first, n.count());
       continue;
     }
-    Bounds3f l = it.box, r = it.box;
-    l.hi[n.axis()] = n.split;
-    r.lo[n.axis()] = n.split;
-    todo.push_back({n.above_child(), r});
-    todo.push_back({it.node + 1, l});
+    todo.push_back({n.above_child(), it.box.above(n.axis(), n.split)});
+    todo.push_back({it.node + 1, it.box.below(n.axis(), n.split)});
   }
 }
 

@@ -76,9 +76,7 @@ bool crossing_edge_in_face(const Vec3f* v, int axis, float s, const Bounds3f& bo
 
 void ref_meets_children(const Scene& scene, const PrimRef& ref, const Bounds3f& box, int axis, float s,
                         ClipMode mode, bool& in_l, bool& in_r) {
-  Bounds3f lbox = box, rbox = box;
-  lbox.hi[axis] = s;
-  rbox.lo[axis] = s;
+  const Bounds3f lbox = box.below(axis, s), rbox = box.above(axis, s);
   in_l = ref.box.overlaps(lbox);
   in_r = ref.box.overlaps(rbox);
   if (mode != ClipMode::exact || scene.is_sphere(ref.prim) || !(in_l || in_r)) return;
@@ -110,12 +108,9 @@ Bounds3f ref_bounds_in(const Scene& scene, const PrimRef& ref, const Bounds3f& c
 
 void ref_bounds_in_children(const Scene& scene, const PrimRef& ref, const Bounds3f& box, int axis, float s,
                             ClipMode mode, Bounds3f& lower, Bounds3f& upper) {
-  Bounds3f lower_box = box, upper_box = box;
-  lower_box.hi[axis] = s;
-  upper_box.lo[axis] = s;
   if (mode != ClipMode::exact || scene.is_sphere(ref.prim)) {
-    lower = ref_bounds_in(scene, ref, lower_box, mode);
-    upper = ref_bounds_in(scene, ref, upper_box, mode);
+    lower = ref_bounds_in(scene, ref, box.below(axis, s), mode);
+    upper = ref_bounds_in(scene, ref, box.above(axis, s), mode);
     return;
   }
   const auto& t = scene.mesh.triangles[ref.prim];
@@ -126,8 +121,8 @@ void ref_bounds_in_children(const Scene& scene, const PrimRef& ref, const Bounds
   // conservative.
   l = intersect(l, ref.box);
   u = intersect(u, ref.box);
-  lower = l.empty() ? intersect(ref.box, lower_box) : l;
-  upper = u.empty() ? intersect(ref.box, upper_box) : u;
+  lower = l.empty() ? intersect(ref.box, box.below(axis, s)) : l;
+  upper = u.empty() ? intersect(ref.box, box.above(axis, s)) : u;
 }
 
 }  // namespace raylab
