@@ -1,6 +1,6 @@
 """Plots of exp_spatial: trace time and throughput against Embree for the kd-tree builders, the
-C_trav:C_isect sweep, build time against N for the sort and event sweeps, split clipping, and the
-three structures side by side."""
+C_trav:C_isect sweep, build time against N for the sort and event sweeps, split clipping, the
+three structures side by side, and the goal traces with their cold- and warm-cache ratios."""
 import pathlib
 
 import matplotlib
@@ -25,7 +25,7 @@ def plot(out: pathlib.Path) -> None:
     if not csv.exists():
         return
     df = pd.read_csv(csv)
-    fig, axes = plt.subplots(2, 3, figsize=(15, 8))
+    fig, axes = plt.subplots(3, 3, figsize=(15, 12))
     h = df[df["part"] == "hierarchy"]
     if len(h):
         _bars(axes[0][0], h, ["scene", "ray_spec", "param"], "throughput_vs_embree", "builders: throughput vs Embree")
@@ -68,6 +68,32 @@ def plot(out: pathlib.Path) -> None:
     s = df[df["part"] == "structures"]
     if len(s):
         _bars(axes[1][2], s, ["scene", "param"], "throughput_vs_embree", "structures: throughput vs Embree")
+    cache = df[df["part"] == "cache"]
+    if len(cache):
+        ax = axes[2][0]
+        cold = cache[cache["param"] == "cold"].reset_index(drop=True)
+        warm = cache[cache["param"] == "warm"].reset_index(drop=True)
+        y = np.arange(len(cold))
+        ax.barh(y - 0.2, cold["throughput_vs_embree"].to_numpy(float), height=0.4, label="cold (each ray once)")
+        ax.barh(y + 0.2, warm["throughput_vs_embree"].to_numpy(float), height=0.4, label="warm (each ray repeated)")
+        ax.axvline(0.6, color="k", linestyle="--", linewidth=1, label="goal 0.6")
+        ax.set_yticks(y)
+        ax.set_yticklabels([f"{r.scene}, {r.ray_spec}" for r in cold.itertuples()], fontsize=6)
+        ax.set_title("SAH kd-tree throughput vs Embree: cold and warm caches", fontsize=9)
+        ax.legend(fontsize=6, loc="lower right")
+        ax.grid(True, axis="x", alpha=0.3)
+        ax = axes[2][1]
+        ax.barh(y - 0.2, cold["ns_per_ray"].to_numpy(float), height=0.4, label="kd-tree cold")
+        ax.barh(y + 0.2, cold["embree_ns_per_ray"].to_numpy(float), height=0.4, label="Embree cold")
+        ax.set_yticks(y)
+        ax.set_yticklabels([f"{r.scene}, {r.ray_spec}" for r in cold.itertuples()], fontsize=6)
+        ax.set_xlabel("ns per ray")
+        ax.set_title("goal traces: ns per ray", fontsize=9)
+        ax.legend(fontsize=6)
+        ax.grid(True, axis="x", alpha=0.3)
+    for ax in axes.flat:
+        if not ax.has_data():
+            ax.set_visible(False)
     fig.tight_layout()
     fig.savefig(out / "spatial.png", dpi=110)
     plt.close(fig)
