@@ -51,3 +51,28 @@ TEST(FuzzRegressions, RayFile) {
 TEST(FuzzRegressions, BuildAndTrace) {
   EXPECT_GT(replay("build_trace", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::build_and_trace(d, s); }), 0u);
 }
+
+// The scene_spec target skips specs above its size budget; the bound it uses must hold, or a
+// spec that is too large for the sanitizers' time limit slips through (CI: `subdivided:levels=2`
+// of the default bunny, 1.2M triangles, 22 s under ASan).
+TEST(FuzzRegressions, SceneSpecSizeBoundHoldsForEveryKind) {
+  for (const std::string spec : {"sphere", "sphere:n=8", "sphereflake", "sphereflake:depth=2,as=triangles,tess=5",
+                                 "stadium", "stadium:object=(grass:blades=7),segments=9,tiers=3", "grass", "walls",
+                                 "soup", "subdivided:of=(sphere:n=100),levels=2", "subdivided:levels=0", "instances",
+                                 "instances:of=(walls:n=2),count=5"}) {
+    SCOPED_TRACE(spec);
+    const auto scene = raylab::make_scene(spec);
+    const double stored = scene->instanced() ? double(scene->base->primitive_count() + scene->instances.size())
+                                             : double(scene->primitive_count());
+    EXPECT_GE(raylab::fuzz::spec_size_bound(spec), stored);
+  }
+}
+
+TEST(FuzzRegressions, SceneSpecSkipsLargeSpecs) {
+  for (const std::string spec : {"subdivided:levels=2", "subdivided:levels=(2)", "subdivided:levels=1",
+                                 "sphereflake:depth=(7)", "soup:n=2000000", "instances:of=(sphere:n=8),count=1000000",
+                                 "stadium:object=(subdivided:of=(sphere:n=5000),levels=2)"})
+    EXPECT_FALSE(raylab::fuzz::small_spec(spec)) << spec;
+  for (const std::string spec : {"subdivided:of=(sphere:n=8),levels=1", "instances", "sphereflake:depth=3"})
+    EXPECT_TRUE(raylab::fuzz::small_spec(spec)) << spec;
+}

@@ -157,7 +157,6 @@ TEST(KdTree, RootEventSortGivesStdSortsKeySequence) {
 TEST(KdTree, SplitEventsGiveEachChildTheSortedEventsOfItsReferences) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> coord(0.0f, 8.0f);
-  const Bounds3f box{{0, 0, 0}, {8, 8, 8}};
   std::size_t straddlers_keeping = 0, straddlers_renewing = 0;
   for (int trial = 0; trial < 40; ++trial) {
     const int axis = trial % 3;
