@@ -41,7 +41,10 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
   auto area_with = [&](double extent) { return area_at_zero + area_per_extent * extent; };
   // Inside the sweep both sides are non-empty (a primitive touching p counts on both), so the
   // cost is SahCost::split without the bonus, with the division by sa taken out of the loop.
+  // Both children are leaves there, and SA(L) + SA(R) = 2·area_at_zero + area_per_extent·(hi - lo)
+  // whatever p, so C_leaf adds a constant per axis.
   const double isect_per_area = cost.c_isect / sa;
+  const double trav = cost.c_trav + cost.c_leaf * (2.0 * area_at_zero + area_per_extent * (double(hi) - lo)) / sa;
   const SplitEvent* e = events.data();
   const std::size_t m = events.size();
   if (m == 0) return;
@@ -64,7 +67,7 @@ void sweep_axis(std::span<const SplitEvent> events, const Bounds3f& box, std::si
     if (i + 1 < m && e[i + 1].pos == p) continue;
     if (p > lo && p < hi) {
       const double sa_l = area_with(double(p) - lo), sa_r = area_with(double(hi) - p);
-      const double split_cost = cost.c_trav + isect_per_area * (sa_l * static_cast<double>(starts_planars) +
+      const double split_cost = trav + isect_per_area * (sa_l * static_cast<double>(starts_planars) +
                                                                 sa_r * static_cast<double>(n - ends_planars_before));
       if (split_cost < best.cost) best = {A, p, split_cost};
     }

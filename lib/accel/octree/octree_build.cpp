@@ -54,6 +54,7 @@ class OctreeBuilder {
         if (ref_meets_box(scene_, r, child_box[i], config_.clip))
           child_refs[i].push_back({ref_bounds_in(scene_, r, child_box[i], config_.clip), r.prim});
       cost += config_.cost.c_isect * surface_area_d(child_box[i]) / sa * static_cast<double>(child_refs[i].size());
+      if (!child_refs[i].empty()) cost += config_.cost.c_leaf * surface_area_d(child_box[i]) / sa;
     }
     if (!(cost < config_.cost.leaf(n))) {
       make_leaf(index, refs, box, depth);

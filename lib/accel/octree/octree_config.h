@@ -12,7 +12,7 @@ enum class OctreeTraversal {
 
 struct OctreeConfig {
   ClipMode clip = ClipMode::exact;  ///< placement and clipping as in the kd-tree (split_clipping.h)
-  /// A node is split at its centre when C_trav + Σ SA(child)/SA·N(child)·C_isect < N·C_isect,
+  /// A node is split at its centre when C_trav + Σ SA(child)/SA·leaf(N(child)) < leaf(N) (SahCost::leaf),
   /// the kd-tree's SAH applied to the eight children (no empty-space bonus). Defaults as the kd-tree's.
   SahCost cost;
   /// Safety depth limit; 0 means 3 + ceil(log8 N), at most 20.
