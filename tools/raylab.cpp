@@ -26,6 +26,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/auto_accel.h"
 #include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/camera.h"
@@ -33,6 +34,7 @@
 #include "rays/ray_generators.h"
 #include "scene/cgal_meshes.h"
 #include "scene/scene_spec.h"
+#include "tools/cost_commands.h"
 #include "tools/heatmap_image.h"
 
 namespace raylab {
@@ -200,6 +202,21 @@ int run_trace(const TraceCommand& o) {
   j["accel_nodes"] = stats.nodes;
   if (stats.sah_cost >= 0) j["sah_cost"] = stats.sah_cost;
   if (const auto hash = accel->structure_hash()) j["structure_hash"] = fmt::format("{:016x}", *hash);
+  if (const auto* chooser = dynamic_cast<const AutoAccelerator*>(accel.get())) {
+    const AutoChoice& c = chooser->choice();
+    nlohmann::ordered_json candidates = nlohmann::ordered_json::array();
+    for (const AutoCandidate& k : c.candidates) {
+      nlohmann::ordered_json e = {{"spec", k.spec}};
+      if (k.skipped.empty()) e["predicted_ns_per_ray"] = k.predicted_ns_per_ray;
+      else e["skipped"] = k.skipped;
+      candidates.push_back(e);
+    }
+    j["auto_choice"] = {{"chosen", c.chosen},
+                        {"predicted_ns_per_ray", c.predicted_ns_per_ray},
+                        {"rays", c.rays},
+                        {"model", c.model},
+                        {"candidates", candidates}};
+  }
   j["build_rss_growth_bytes"] = peak_rss_bytes() - rss_before;
 
   if (!o.check.empty()) {
@@ -326,6 +343,38 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--threads", render.threads, "threads");
   render_cmd->add_flag("--heatmap", render.heatmap, "nodes + tests per pixel with a colour bar");
 
+  SweepCommand sweep;
+  auto* sweep_cmd = app.add_subcommand("sweep", "measure the cost model's data set: every case of a plan, one CSV row each");
+  sweep_cmd->add_option("--plan", sweep.plan, "quick | full | a plan file (JSON: scenes, accels, rays)")->required();
+  sweep_cmd->add_option("--out", sweep.out, "the runs CSV (appended row by row)")->required();
+  sweep_cmd->add_option("--shard", sweep.shard, "K/N: run the cases whose number is K modulo N");
+  sweep_cmd->add_flag("--resume", sweep.resume, "continue an existing --out, skipping its cases");
+  sweep_cmd->add_option("--threads", sweep.threads, "tracing and build threads (default 1: the single-thread figures)");
+  sweep_cmd->add_option("--passes", sweep.passes, "timed passes per case, at least 5 (default 5)");
+
+  FitCommand fit;
+  auto* fit_cmd = app.add_subcommand("fit", "fit the cost model (Ceres) to a data set and select its terms");
+  fit_cmd->add_option("--runs", fit.runs, "the runs CSV of raylab sweep")->required();
+  fit_cmd->add_option("--out", fit.out, "the model file to write (model.json)")->required();
+  fit_cmd->add_option("--loss-scale", fit.loss_scale, "Huber loss scale on relative residuals (default 0.1 = 10%)");
+  fit_cmd->add_option("--target", fit.target,
+                      "embree-normalized (default: each time scaled by its Embree passes' disturbance) | min");
+  fit_cmd->add_flag("--allow-mixed-hardware", fit.allow_mixed_hardware, "fit rows measured on different CPU models");
+  fit_cmd->add_flag("--json", fit.json, "print a JSON summary instead of the table");
+
+  PredictCommand predict;
+  auto* predict_cmd = app.add_subcommand("predict", "predict ns/ray of an accelerator on a scene from a fitted model");
+  predict_cmd->add_option("--model", predict.model, "model.json, or 'default' (the committed model)");
+  predict_cmd->add_option("--scene", predict.scene, "scene spec")->required();
+  predict_cmd->add_option("--accel", predict.accel, "accelerator spec")->required();
+  predict_cmd->add_option("--rays", predict.rays, "ray spec (its kind selects the ray-kind terms)");
+  predict_cmd->add_flag("--measure", predict.measure, "also trace and time it as raylab sweep does");
+  predict_cmd->add_option("--threads", predict.threads, "threads (default 1)");
+  predict_cmd->add_option("--passes", predict.passes, "timed passes with --measure, at least 5");
+  predict_cmd->add_flag("--allow-extrapolation", predict.allow_extrapolation,
+                        "predict even far outside the data the model was fitted on");
+  predict_cmd->add_flag("--json", predict.json, "print one JSON object");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -344,6 +393,9 @@ int main(int argc, char** argv) {
     else if (info_cmd->parsed()) return run_info(info);
     else if (trace_cmd->parsed()) return run_trace(trace);
     else if (render_cmd->parsed()) return run_render(render);
+    else if (sweep_cmd->parsed()) return run_sweep_command(sweep);
+    else if (fit_cmd->parsed()) return run_fit_command(fit);
+    else if (predict_cmd->parsed()) return run_predict_command(predict);
     return 0;
   } catch (const InputError& e) {
     std::cerr << "raylab: error: " << e.what() << "\n";

@@ -160,4 +160,20 @@ void clipped_triangle_bounds_split(const Vec3f& p0, const Vec3f& p1, const Vec3f
   upper = side(in_upper, 1.0, upper_box, upper_fallback);
 }
 
+double clipped_triangle_area(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box) {
+  ClipPolygon poly[2] = {triangle_polygon(p0, p1, p2), {}};
+  int cur = 0;
+  if (!clip_to_box(poly, cur, box)) return 0.0;
+  const ClipPolygon& a = poly[cur];
+  // Half the norm of Σ (v_i - v_0) × (v_{i+1} - v_0) over the fan of the convex polygon.
+  Vec3d sum(0.0);
+  const Vec3d v0(a.p[0][0], a.p[0][1], a.p[0][2]);
+  for (int i = 1; i + 1 < a.n; ++i) {
+    const Vec3d u = Vec3d(a.p[i][0], a.p[i][1], a.p[i][2]) - v0;
+    const Vec3d w = Vec3d(a.p[i + 1][0], a.p[i + 1][1], a.p[i + 1][2]) - v0;
+    sum = sum + cross(u, w);
+  }
+  return 0.5 * length(sum);
+}
+
 }  // namespace raylab

@@ -25,4 +25,9 @@ Bounds3f clipped_triangle_bounds(const Vec3f& p0, const Vec3f& p1, const Vec3f& 
 void clipped_triangle_bounds_split(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box, int axis,
                                    float pos, Bounds3f& lower, Bounds3f& upper);
 
+/// The area of the closed triangle (p0, p1, p2) inside the closed `box`, clipped in double
+/// precision (Sutherland-Hodgman): approximate to rounding, for measures such as the end-point
+/// overlap, never for placement decisions.
+double clipped_triangle_area(const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Bounds3f& box);
+
 }  // namespace raylab

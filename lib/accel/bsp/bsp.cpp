@@ -1,3 +1,4 @@
+#include "accel/common/fitted_cost.h"
 #include "accel/common/structure_hash.h"
 #include "accel/bsp/bsp.h"
 
@@ -20,8 +21,7 @@ std::optional<std::uint64_t> BspTree::structure_hash() const {
 
 BspConfig read_bsp_config(SpecReader& r) {
   BspConfig c;
-  c.cost.c_trav = r.get_double("c_trav", 1.0, 1e-6, 1e6);
-  c.cost.c_isect = r.get_double("c_isect", 1.5, 1e-6, 1e6);
+  read_sah_constants(r, "bsp", 1.0, 1.5, c.cost);
   c.cost.empty_bonus = r.get_double("empty_bonus", 0.2, 0.0, 0.99);
   c.triangle_candidates = static_cast<int>(r.get_int("triangle_candidates", 6, 0, 1024));
   c.axis_candidates = static_cast<int>(r.get_int("axis_candidates", 2, 0, 64));
@@ -48,6 +48,7 @@ AccelKind make_bsp_kind() {
           "classification, straddlers referenced on both sides",
           {{"c_trav", "1", "SAH traversal cost"},
            {"c_isect", "1.5", "SAH intersection cost"},
+           fitted_cost_param(),
            {"empty_bonus", "0.2", "SAH empty-space bonus"},
            {"triangle_candidates", "6", "supporting planes tried per node"},
            {"axis_candidates", "2", "axis-aligned planes tried per axis and node"},
@@ -60,7 +61,7 @@ AccelKind make_bsp_kind() {
                     "exact agreement (watertight kernel, exact classification, error-bounded traversal), except on "
                     "rays grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
           },
-          {"axis_candidates=0"}};
+          {"axis_candidates=0", "cost=default"}};
 }
 
 namespace {

@@ -1,4 +1,5 @@
 #include "accel/bvh/bvh.h"
+#include "accel/common/fitted_cost.h"
 
 #include <string>
 
@@ -36,6 +37,7 @@ std::vector<ParamDoc> bvh_params() {
           {"bins", "32", "SAH bins per axis, in [2, 256]"},
           {"c_trav", "1 (width=2), 3 (width=4|8)", "SAH traversal cost"},
           {"c_isect", "1", "SAH intersection cost"},
+          fitted_cost_param(),
           {"alpha", "1e-5", "SBVH: try spatial splits where child overlap exceeds alpha * SA(root)"},
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
           {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
@@ -59,8 +61,7 @@ BvhConfig read_bvh_config(SpecReader& r) {
   // Wide trees test a packet of kPacketWidth triangles for about the price of one box test, so
   // their binary tree is built with costlier traversal, i.e. fuller leaves (measured on the CGAL
   // meshes: c_trav = 3 is ~10% faster than 1 at width 8 and halves the packed-leaf memory).
-  c.cost.c_trav = r.get_double("c_trav", c.width == 2 ? 1.0 : 3.0, 1e-6, 1e6);
-  c.cost.c_isect = r.get_double("c_isect", 1.0, 1e-6, 1e6);
+  read_sah_constants(r, c.width == 2 ? "bvh" : "bvh" + std::to_string(c.width), c.width == 2 ? 1.0 : 3.0, 1.0, c.cost);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
   c.robust = r.get_bool("robust", true);
@@ -97,7 +98,7 @@ AccelKind make_bvh_kind() {
           },
           {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
-           "builder=sweep"}};
+           "builder=sweep", "cost=default", "width=2,cost=default"}};
 }
 
 namespace {

@@ -26,6 +26,9 @@ class Bvh final : public AggregateBase<Bvh> {
   std::optional<std::uint64_t> structure_hash() const override;
 
   const Bvh2& tree() const { return tree_; }
+  /// The traversed wide trees: filled only when config().width is 4 or 8 respectively.
+  const WideBvh<4>& wide4() const { return wide4_; }
+  const WideBvh<8>& wide8() const { return wide8_; }
   const BvhConfig& config() const { return config_; }
 
   template <class Counters>

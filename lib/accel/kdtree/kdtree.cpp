@@ -1,3 +1,4 @@
+#include "accel/common/fitted_cost.h"
 #include "accel/common/structure_hash.h"
 #include "accel/kdtree/kdtree.h"
 
@@ -37,6 +38,7 @@ std::vector<ParamDoc> kdtree_params() {
           {"traversal", "stack", "recursive (Kaplan/Arvo/Jansen) | stack"},
           {"c_trav", "1", "SAH traversal cost"},
           {"c_isect", "1.5", "SAH intersection cost"},
+          fitted_cost_param(),
           {"empty_bonus", "0.2", "SAH empty-space bonus in [0,1)"},
           {"max_depth", "0", "safety depth limit; 0 = 8 + 1.3 log2 N, at most 64"},
           {"leaf_size", "4", "midpoint/median: largest leaf"},
@@ -52,8 +54,7 @@ KdTreeConfig read_kdtree_config(SpecReader& r) {
   c.sweep = r.get_choice("sweep", "events", kSweeps) == "sort" ? KdSweep::sort : KdSweep::events;
   c.clip = parse_clip_mode(r.get_choice("clip", "exact", clip_mode_names()));
   c.traversal = r.get_choice("traversal", "stack", kTraversals) == "recursive" ? KdTraversal::recursive : KdTraversal::stack;
-  c.cost.c_trav = r.get_double("c_trav", 1.0, 1e-6, 1e6);
-  c.cost.c_isect = r.get_double("c_isect", 1.5, 1e-6, 1e6);
+  read_sah_constants(r, "kdtree", 1.0, 1.5, c.cost);
   c.cost.empty_bonus = r.get_double("empty_bonus", 0.2, 0.0, 0.99);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 64));
   c.leaf_size = static_cast<int>(r.get_int("leaf_size", 4, 1, 1 << 20));
@@ -85,7 +86,7 @@ AccelKind make_kdtree_kind() {
                     "grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
           },
           {"builder=midpoint,traversal=recursive", "builder=median,clip=bbox,mailbox=on", "sweep=sort,clip=none",
-           "clip=bbox,traversal=recursive,mailbox=on"}};
+           "clip=bbox,traversal=recursive,mailbox=on", "cost=default"}};
 }
 
 namespace {

@@ -33,6 +33,20 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   Bounds3f bounds() const override { return bounds_; }
   std::size_t level_count() const { return levels_.size(); }
 
+  /// Calls f(box, count, refined) for every cell of every level: its box, its primitive count
+  /// (0 for a refined cell) and whether a grid of the next level refines it.
+  template <class F>
+  void for_each_cell(F&& f) const {
+    for (const Level& level : levels_)
+      for (int k = 0; k < level.geom.res[2]; ++k)
+        for (int j = 0; j < level.geom.res[1]; ++j)
+          for (int i = 0; i < level.geom.res[0]; ++i) {
+            const Cell cell = cells_[level.cell_base + level.geom.index(i, j, k)];
+            const bool refined = cell.count == kChild;
+            f(level.geom.cell_box(i, j, k), refined ? 0u : cell.count, refined);
+          }
+  }
+
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
     return config_.cells.mailbox ? closest<Counters, true>(ray, hit, counters)

@@ -1,3 +1,4 @@
+#include "accel/common/fitted_cost.h"
 #include "accel/common/structure_hash.h"
 #include "accel/octree/octree.h"
 
@@ -21,8 +22,7 @@ std::optional<std::uint64_t> Octree::structure_hash() const {
 OctreeConfig read_octree_config(SpecReader& r) {
   OctreeConfig c;
   c.clip = parse_clip_mode(r.get_choice("clip", "exact", clip_mode_names()));
-  c.cost.c_trav = r.get_double("c_trav", 1.0, 1e-6, 1e6);
-  c.cost.c_isect = r.get_double("c_isect", 1.5, 1e-6, 1e6);
+  read_sah_constants(r, "octree", 1.0, 1.5, c.cost);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 20));
   c.mailbox = r.get_bool("mailbox", false);
   c.traversal = r.get_choice("traversal", "revelles", {"revelles", "kd"}) == "kd" ? OctreeTraversal::kd
@@ -49,6 +49,7 @@ AccelKind make_octree_kind() {
           {{"clip", "exact", "split clipping: none | bbox | exact"},
            {"c_trav", "1", "traversal cost of the termination rule"},
            {"c_isect", "1.5", "intersection cost of the termination rule"},
+           fitted_cost_param(),
            {"max_depth", "0", "safety depth limit; 0 = 3 + ceil(log8 N), at most 20"},
            {"mailbox", "off", "skip primitives a ray already tested"},
            {"traversal", "revelles",
@@ -60,7 +61,7 @@ AccelKind make_octree_kind() {
                     "exact agreement (watertight kernel, conservative placement and traversal), except on rays "
                     "grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
           },
-          {"clip=none", "clip=bbox,mailbox=on", "traversal=kd", "clip=none,traversal=kd,mailbox=on"}};
+          {"clip=none", "clip=bbox,mailbox=on", "traversal=kd", "clip=none,traversal=kd,mailbox=on", "cost=default"}};
 }
 
 namespace {

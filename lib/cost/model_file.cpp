@@ -1,0 +1,298 @@
+#include "cost/model_file.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+
+#include "cost/provenance.h"
+#include "geometry/input_error.h"
+
+namespace raylab {
+namespace {
+
+using Json = nlohmann::ordered_json;
+constexpr const char* kFormat = "raylab-cost-model";
+
+Json number_or_null(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
+Json strings(const std::vector<std::string>& v) {
+  Json a = Json::array();
+  for (const auto& s : v) a.push_back(s);
+  return a;
+}
+
+Json level_json(const LevelFit& f) {
+  Json terms = Json::array();
+  for (std::size_t j = 0; j < f.model.terms.size(); ++j) {
+    const CostTerm& t = find_cost_term(f.model.level, f.model.terms[j]);
+    terms.push_back({{"name", t.name},
+                     {"meaning", t.meaning},
+                     {"value", f.model.values[j]},
+                     {"std_error", number_or_null(f.model.std_errors[j])},
+                     {"at_bound", j < f.at_bound.size() && f.at_bound[j]}});
+  }
+  Json by_family = Json::object();
+  for (const auto& [family, t] : f.by_scene_family) by_family[family] = strings(t);
+  Json path = Json::array();
+  for (const ScoredModel& s : f.path)
+    path.push_back({{"terms", strings(s.terms)},
+                    {"held_out_mape", number_or_null(s.held_out_mape)},
+                    {"in_sample_mape", number_or_null(s.in_sample_mape)},
+                    {"aic", number_or_null(s.aic)},
+                    {"bic", number_or_null(s.bic)}});
+  return {{"terms", terms},
+          {"in_sample", {{"mape", f.in_sample_mape}, {"r2", f.in_sample_r2}}},
+          {"held_out",
+           {{"cross_validated", f.cross_validated}, {"mape", f.held_out_mape}, {"r2", f.held_out_r2}}},
+          {"aic", f.aic},
+          {"bic", f.bic},
+          {"condition_number", number_or_null(f.condition_number)},
+          {"converged", f.converged},
+          {"dropped", strings(f.dropped)},
+          {"unused", strings(f.unused)},
+          {"by_scene_family", by_family},
+          {"selection_path", path}};
+}
+
+/// Typed access to a JSON object, with errors naming the file and the key path.
+class Reader {
+ public:
+  Reader(const Json& j, std::string where) : j_(j), where_(std::move(where)) {
+    if (!j_.is_object()) throw InputError(where_ + ": expected a JSON object");
+  }
+  const Json& at(const std::string& key) const {
+    const auto it = j_.find(key);
+    if (it == j_.end()) throw InputError(where_ + ": missing key '" + key + "'");
+    return *it;
+  }
+  Reader object(const std::string& key) const { return Reader(at(key), where_ + "." + key); }
+  double number(const std::string& key, bool nullable = false) const {
+    const Json& v = at(key);
+    if (nullable && v.is_null()) return std::numeric_limits<double>::quiet_NaN();
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+      throw InputError(where_ + "." + key + ": expected a finite number");
+    return v.get<double>();
+  }
+  std::string string(const std::string& key) const {
+    const Json& v = at(key);
+    if (!v.is_string()) throw InputError(where_ + "." + key + ": expected a string");
+    return v.get<std::string>();
+  }
+  bool boolean(const std::string& key) const {
+    const Json& v = at(key);
+    if (!v.is_boolean()) throw InputError(where_ + "." + key + ": expected true or false");
+    return v.get<bool>();
+  }
+  std::vector<std::string> strings(const std::string& key) const {
+    const Json& v = at(key);
+    if (!v.is_array()) throw InputError(where_ + "." + key + ": expected a list of strings");
+    std::vector<std::string> out;
+    for (const Json& s : v) {
+      if (!s.is_string()) throw InputError(where_ + "." + key + ": expected a list of strings");
+      out.push_back(s.get<std::string>());
+    }
+    return out;
+  }
+  const Json& json() const { return j_; }
+  const std::string& where() const { return where_; }
+
+ private:
+  const Json& j_;
+  std::string where_;
+};
+
+LevelFit read_level(const Reader& r, ModelLevel level) {
+  LevelFit f;
+  f.model.level = level;
+  const Json& terms = r.at("terms");
+  if (!terms.is_array() || terms.empty()) throw InputError(r.where() + ".terms: expected a non-empty list");
+  for (std::size_t j = 0; j < terms.size(); ++j) {
+    const Reader t(terms[j], r.where() + ".terms[" + std::to_string(j) + "]");
+    const std::string name = t.string("name");
+    try {
+      find_cost_term(level, name);
+    } catch (const InputError& e) {
+      throw InputError(t.where() + ": " + e.what());
+    }
+    const double value = t.number("value");
+    if (value < 0) throw InputError(t.where() + ".value: a cost constant must not be negative");
+    f.model.terms.push_back(name);
+    f.model.values.push_back(value);
+    f.model.std_errors.push_back(t.number("std_error", true));
+    f.at_bound.push_back(t.boolean("at_bound"));
+  }
+  const Reader in = r.object("in_sample"), out = r.object("held_out");
+  f.in_sample_mape = in.number("mape");
+  f.in_sample_r2 = in.number("r2");
+  f.cross_validated = out.boolean("cross_validated");
+  f.held_out_mape = out.number("mape");
+  f.held_out_r2 = out.number("r2");
+  f.aic = r.number("aic");
+  f.bic = r.number("bic");
+  f.condition_number = r.number("condition_number", true);
+  f.converged = r.boolean("converged");
+  f.dropped = r.strings("dropped");
+  f.unused = r.strings("unused");
+  const Reader by = r.object("by_scene_family");
+  for (auto it = by.json().begin(); it != by.json().end(); ++it) f.by_scene_family[it.key()] = by.strings(it.key());
+  const Json& path = r.at("selection_path");
+  if (!path.is_array()) throw InputError(r.where() + ".selection_path: expected a list");
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const Reader s(path[k], r.where() + ".selection_path[" + std::to_string(k) + "]");
+    ScoredModel m;
+    m.terms = s.strings("terms");
+    m.held_out_mape = s.number("held_out_mape", true);
+    m.in_sample_mape = s.number("in_sample_mape", true);
+    m.aic = s.number("aic", true);
+    m.bic = s.number("bic", true);
+    f.path.push_back(std::move(m));
+  }
+  return f;
+}
+
+}  // namespace
+
+std::string default_model_path() { return raylab_data_dir() + "/cost/default_model.json"; }
+
+std::string resolve_model_path(const std::string& path) { return path == "default" ? default_model_path() : path; }
+
+void write_model_file(const CostModelSet& set, const std::string& path) {
+  Json families = Json::object();
+  for (const auto& [name, m] : set.families) {
+    Json ranges = Json::object();
+    for (const auto& [key, range] : m.ranges) ranges[key] = {range.lo, range.hi};
+    families[name] = {{"rows", m.rows},
+                      {"scenes", strings(m.scenes)},
+                      {"counters", level_json(m.counters)},
+                      {"tree", level_json(m.tree)},
+                      {"builder",
+                       {{"c_trav", m.builder.c_trav},
+                        {"c_leaf", m.builder.c_leaf},
+                        {"c_isect", m.builder.c_isect},
+                        {"source", m.builder_source}}},
+                      {"ranges", ranges}};
+  }
+  const Json j = {{"format", kFormat},
+                  {"version", CostModelSet::kVersion},
+                  {"created", set.created},
+                  {"data",
+                   {{"runs", set.runs_source},
+                    {"rows", set.rows},
+                    {"hosts", strings(set.hosts)},
+                    {"cpu_models", strings(set.cpu_models)},
+                    {"git_revisions", strings(set.git_revisions)}}},
+                  {"fit",
+                   {{"target", target_name(set.target)},
+                    {"residual", set.options.residual == ResidualKind::relative ? "relative" : "absolute"},
+                    {"loss", "huber"},
+                    {"loss_scale", set.options.loss_scale},
+                    {"nonnegative", set.options.nonnegative}}},
+                  {"families", families}};
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path + ": cannot write");
+    out << j.dump(2) << '\n';
+    if (!out.flush()) {
+      std::filesystem::remove(tmp);
+      throw InputError(path + ": write failed");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp);
+    throw InputError(path + ": cannot write (" + ec.message() + ")");
+  }
+}
+
+CostModelSet read_model_file(const std::string& path_in) {
+  const std::string path = resolve_model_path(path_in);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot read the cost model");
+  Json j;
+  try {
+    j = Json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    const std::string msg = e.what();
+    const auto at = msg.find("parse error");
+    throw InputError(path + ": malformed JSON: " + (at == std::string::npos ? msg : msg.substr(at)));
+  }
+  const Reader root(j, path);
+  if (!root.at("format").is_string() || root.string("format") != kFormat)
+    throw InputError(path + ": not a raylab cost model (format is not '" + std::string(kFormat) + "')");
+  const double version = root.number("version");
+  if (version != CostModelSet::kVersion)
+    throw InputError(path + ": cost model version " + root.at("version").dump() + ", this raylab reads version " +
+                     std::to_string(CostModelSet::kVersion) + " (refit it with raylab fit)");
+  CostModelSet set;
+  set.created = root.string("created");
+  const Reader data = root.object("data");
+  set.runs_source = data.string("runs");
+  set.rows = static_cast<std::size_t>(data.number("rows"));
+  set.hosts = data.strings("hosts");
+  set.cpu_models = data.strings("cpu_models");
+  set.git_revisions = data.strings("git_revisions");
+  const Reader fit = root.object("fit");
+  try {
+    set.target = parse_fit_target(fit.string("target"));
+  } catch (const InputError& e) {
+    throw InputError(path + ".fit.target: " + e.what());
+  }
+  set.options.residual = fit.string("residual") == "absolute" ? ResidualKind::absolute : ResidualKind::relative;
+  set.options.loss_scale = fit.number("loss_scale");
+  set.options.nonnegative = fit.boolean("nonnegative");
+  const Reader families = root.object("families");
+  if (families.json().empty()) throw InputError(path + ".families: the model has no structure family");
+  for (auto it = families.json().begin(); it != families.json().end(); ++it) {
+    const Reader f = families.object(it.key());
+    FamilyModel m;
+    m.family = it.key();
+    m.rows = static_cast<std::size_t>(f.number("rows"));
+    m.scenes = f.strings("scenes");
+    m.counters = read_level(f.object("counters"), ModelLevel::counters);
+    m.tree = read_level(f.object("tree"), ModelLevel::tree);
+    const Reader b = f.object("builder");
+    m.builder = {b.number("c_trav"), b.number("c_leaf"), b.number("c_isect")};
+    m.builder_source = b.string("source");
+    const Reader ranges = f.object("ranges");
+    for (auto r = ranges.json().begin(); r != ranges.json().end(); ++r) {
+      const Json& v = r.value();
+      if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())
+        throw InputError(ranges.where() + "." + r.key() + ": expected [lo, hi]");
+      m.ranges[r.key()] = {v[0].get<double>(), v[1].get<double>()};
+    }
+    set.families[m.family] = std::move(m);
+  }
+  return set;
+}
+
+FittedSahCost load_builder_costs(const std::string& path, const std::string& family) {
+  static std::mutex mutex;
+  static std::map<std::string, CostModelSet> cache;
+  const std::string resolved = resolve_model_path(path);
+  const CostModelSet* set;
+  {
+    std::lock_guard lock(mutex);
+    auto it = cache.find(resolved);
+    if (it == cache.end()) it = cache.emplace(resolved, read_model_file(resolved)).first;
+    set = &it->second;
+  }
+  const FamilyModel& m = set->family(family);
+  if (!(m.builder.c_trav > 0) || !(m.builder.c_isect > 0) || !(m.builder.c_leaf >= 0))
+    throw InputError(resolved + ": the fitted constants of '" + family + "' are not positive (c_trav " +
+                     std::to_string(m.builder.c_trav) + ", c_isect " + std::to_string(m.builder.c_isect) +
+                     "); a builder cannot use them");
+  return m.builder;
+}
+
+namespace {
+/// lib/accel reads `cost=` through this loader (fitted_cost.h).
+const bool kLoaderRegistered = (set_fitted_cost_loader(&load_builder_costs), true);
+}  // namespace
+
+}  // namespace raylab

@@ -1,0 +1,35 @@
+#pragma once
+/// The versioned JSON of a fitted cost model (`raylab fit --out model.json`), read by `raylab
+/// predict`, by the builders' `cost=` (fitted_cost.h) and by the `auto` accelerator. The format
+/// is documented in docs/cost_model.md; its top level is
+///
+///   {"format": "raylab-cost-model", "version": 1, "created": ..., "data": {...}, "fit": {...},
+///    "families": {"kdtree": {"counters": {...}, "tree": {...}, "builder": {...}, ...}, ...}}
+///
+/// A file of another format or version, a missing key, or a non-finite value is an InputError
+/// naming the file and the key.
+#include <string>
+
+#include "cost/model_fit.h"
+
+namespace raylab {
+
+/// Writes `set` to `path` atomically (a temporary file renamed over it), so that a failed write
+/// leaves no partial model behind.
+void write_model_file(const CostModelSet& set, const std::string& path);
+
+/// Reads and validates a model file; `default` names default_model_path().
+CostModelSet read_model_file(const std::string& path);
+
+/// The model committed with the lab (data/cost/default_model.json), which `./lab report` refits.
+std::string default_model_path();
+
+/// `path`, with `default` resolved to default_model_path().
+std::string resolve_model_path(const std::string& path);
+
+/// The SAH constants for `family` from the model at `path` (the loader lib/cost registers for
+/// the builders' `cost=`); throws InputError when the family is missing or its constants are not
+/// positive. Files are read once per process and path.
+FittedSahCost load_builder_costs(const std::string& path, const std::string& family);
+
+}  // namespace raylab

@@ -1,0 +1,43 @@
+#include "cost/timing.h"
+
+#include <algorithm>
+
+#include "accel/common/tracer.h"
+
+namespace raylab {
+namespace {
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+}  // namespace
+
+AlternatingTiming time_alternating(const Primitive& ours, const Primitive* embree, const std::vector<Ray>& rays,
+                                   const TimingOptions& options) {
+  const TraceOptions trace{options.threads, false, options.any_hit};
+  std::vector<double> mine, theirs;
+  double spent = 0;
+  while (static_cast<int>(mine.size()) < options.max_passes &&
+         (static_cast<int>(mine.size()) < options.min_passes || spent < options.min_seconds)) {
+    if (embree) theirs.push_back(trace_rays(*embree, rays, trace).seconds);
+    const double s = trace_rays(ours, rays, trace).seconds;
+    mine.push_back(s);
+    spent += s;
+  }
+  const double per_ray = 1e9 / static_cast<double>(rays.size());
+  AlternatingTiming t;
+  t.passes = static_cast<int>(mine.size());
+  t.ns_per_ray_min = *std::min_element(mine.begin(), mine.end()) * per_ray;
+  t.ns_per_ray_median = median_of(mine) * per_ray;
+  if (!theirs.empty()) {
+    t.embree_ns_per_ray_min = *std::min_element(theirs.begin(), theirs.end()) * per_ray;
+    t.embree_ns_per_ray_median = median_of(theirs) * per_ray;
+  }
+  return t;
+}
+
+}  // namespace raylab

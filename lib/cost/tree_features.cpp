@@ -1,0 +1,380 @@
+#include "cost/tree_features.h"
+
+#include <algorithm>
+#include <functional>
+#include <map>
+
+#include "accel/bsp/bsp.h"
+#include "accel/common/ray_sets.h"
+#include "accel/bsp/bsp_cell.h"
+#include "accel/bvh/bvh.h"
+#include "accel/common/accel_factory.h"
+#include "accel/grid/uniform_grid.h"
+#include "accel/kdtree/kdtree.h"
+#include "accel/kdtree/sah_cost.h"
+#include "accel/nested_grid/nested_grid.h"
+#include "accel/octree/octree.h"
+#include "cost/provenance.h"
+#include "geometry/input_error.h"
+#include "geometry/triangle_clipping.h"
+
+namespace raylab {
+namespace {
+
+/// Accumulates the surface-area expectations of tree_features.h, given SA(root).
+class SurfaceSums {
+ public:
+  SurfaceSums(double root_area, std::size_t bytes) : inv_root_(root_area > 0 ? 1.0 / root_area : 0.0) {
+    f_.bytes = bytes;
+  }
+  void inner(double area, int depth) {
+    f_.expected_inner += area * inv_root_;
+    ++f_.inner_nodes;
+    f_.depth = std::max(f_.depth, depth);
+  }
+  /// A leaf whose tests run in `groups` SIMD groups (default ⌈prims/4⌉).
+  void leaf(double area, std::size_t prims, int depth, std::size_t groups = 0) {
+    f_.depth = std::max(f_.depth, depth);
+    if (prims == 0) return;  // empty leaves cost no test and are skipped by the traversals
+    const double p = area * inv_root_;
+    f_.expected_leaves += p;
+    f_.expected_tests += p * static_cast<double>(prims);
+    f_.expected_test_groups += p * static_cast<double>(groups > 0 ? groups : (prims + 3) / 4);
+    ++f_.leaves;
+    f_.references += prims;
+  }
+  TreeFeatures& features() { return f_; }
+
+ private:
+  double inv_root_;
+  TreeFeatures f_;
+};
+
+TreeFeatures kdtree_features(const KdTree& tree) {
+  const KdTreeData& d = tree.data();
+  SurfaceSums sums(surface_area_d(d.bounds), tree.stats().bytes);
+  struct Item {
+    std::uint32_t node;
+    Bounds3f box;
+    int depth;
+  };
+  std::vector<Item> todo = {{0, d.bounds, 0}};
+  while (!todo.empty()) {
+    const Item it = todo.back();
+    todo.pop_back();
+    const KdNode& n = d.nodes[it.node];
+    if (n.is_leaf()) {
+      sums.leaf(surface_area_d(it.box), n.count(), it.depth);
+      continue;
+    }
+    sums.inner(surface_area_d(it.box), it.depth);
+    todo.push_back({n.above_child(), it.box.above(n.axis(), n.split), it.depth + 1});
+    todo.push_back({it.node + 1, it.box.below(n.axis(), n.split), it.depth + 1});
+  }
+  return sums.features();
+}
+
+TreeFeatures octree_features(const Octree& tree) {
+  const OctreeData& d = tree.data();
+  SurfaceSums sums(surface_area_d(d.bounds), tree.stats().bytes);
+  struct Item {
+    std::uint32_t node;
+    Bounds3f box;
+    int depth;
+  };
+  std::vector<Item> todo = {{0, d.bounds, 0}};
+  while (!todo.empty()) {
+    const Item it = todo.back();
+    todo.pop_back();
+    const OctNode& n = d.nodes[it.node];
+    if (n.is_leaf()) {
+      sums.leaf(surface_area_d(it.box), n.count, it.depth);
+      continue;
+    }
+    sums.inner(surface_area_d(it.box), it.depth);
+    for (unsigned i = 0; i < 8; ++i) todo.push_back({n.first + i, octree_child_box(it.box, i), it.depth + 1});
+  }
+  return sums.features();
+}
+
+TreeFeatures bsp_features(const BspTree& tree) {
+  const BspTreeData& d = tree.data();
+  const ConvexCell root(d.bounds);
+  SurfaceSums sums(root.surface_area(), tree.stats().bytes);
+  struct Item {
+    std::uint32_t node;
+    ConvexCell cell;
+    int depth;
+  };
+  std::vector<Item> todo;
+  todo.push_back({0, root, 0});
+  while (!todo.empty()) {
+    Item it = std::move(todo.back());
+    todo.pop_back();
+    const BspNode& n = d.nodes[it.node];
+    if (n.is_leaf()) {
+      sums.leaf(it.cell.surface_area(), n.count, it.depth);
+      continue;
+    }
+    sums.inner(it.cell.surface_area(), it.depth);
+    BspPlane plane;
+    plane.normal = {n.normal[0], n.normal[1], n.normal[2]};
+    plane.origin = {n.origin[0], n.origin[1], n.origin[2]};
+    plane.offset = dot(plane.normal, plane.origin);
+    plane.scale = n.scale;
+    ConvexCell negative, positive;
+    it.cell.split(plane, negative, positive);
+    todo.push_back({n.index, std::move(positive), it.depth + 1});
+    todo.push_back({it.node + 1, std::move(negative), it.depth + 1});
+  }
+  return sums.features();
+}
+
+/// Triangle areas and boxes of a scene's triangles, for the EPO.
+struct TriangleGeometry {
+  std::vector<double> area;
+  std::vector<Bounds3f> box;
+  double total_area = 0;
+};
+
+TriangleGeometry triangle_geometry(const Scene& scene) {
+  TriangleGeometry g;
+  const std::size_t n = scene.mesh.size();
+  g.area.resize(n);
+  g.box.resize(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const Vec3d a(scene.mesh.vertex(t, 0)), b(scene.mesh.vertex(t, 1)), c(scene.mesh.vertex(t, 2));
+    g.area[t] = 0.5 * length(cross(b - a, c - a));
+    g.box[t] = scene.mesh.triangle_bounds(t);
+    g.total_area += g.area[t];
+  }
+  return g;
+}
+
+/// The end-point overlap of a binary BVH (tree_features.h). Top-down: the foreign primitives
+/// overlapping a child's box are among the parent's foreign primitives and the sibling's, less
+/// the child's own (SBVH references a primitive on both sides). O(N·depth) box tests.
+double bvh2_epo(const Bvh2& tree, const Scene& scene) {
+  const TriangleGeometry g = triangle_geometry(scene);
+  if (g.total_area <= 0 || tree.nodes.empty()) return 0.0;
+  const std::size_t triangles = scene.mesh.size();
+  std::vector<std::uint32_t> mark(scene.primitive_count(), 0);
+  std::uint32_t stamp = 0;
+
+  auto subtree_prims = [&](std::uint32_t node, auto&& f) {
+    std::vector<std::uint32_t> stack = {node};
+    while (!stack.empty()) {
+      const Bvh2Node& n = tree.nodes[stack.back()];
+      stack.pop_back();
+      if (n.is_leaf()) {
+        for (std::uint32_t i = n.first; i < n.first + n.count; ++i) f(tree.prims[i]);
+      } else {
+        stack.push_back(n.first);
+        stack.push_back(n.first + 1);
+      }
+    }
+  };
+  auto foreign_area = [&](const std::vector<std::uint32_t>& foreign, const Bounds3f& box) {
+    double a = 0;
+    for (std::uint32_t t : foreign) {
+      const auto& tri = scene.mesh.triangles[t];
+      a += clipped_triangle_area(scene.mesh.vertices[tri[0]], scene.mesh.vertices[tri[1]], scene.mesh.vertices[tri[2]], box);
+    }
+    return a;
+  };
+
+  double epo = 0;
+  struct Item {
+    std::uint32_t node;
+    std::vector<std::uint32_t> foreign;  ///< triangles outside the subtree overlapping the box
+  };
+  std::vector<Item> todo;
+  todo.push_back({0, {}});
+  while (!todo.empty()) {
+    Item it = std::move(todo.back());
+    todo.pop_back();
+    const Bvh2Node& n = tree.nodes[it.node];
+    const double weight = n.is_leaf() ? static_cast<double>(n.count) : 1.0;
+    epo += weight * foreign_area(it.foreign, n.box);
+    if (n.is_leaf()) continue;
+    for (int side = 0; side < 2; ++side) {
+      const std::uint32_t child = n.first + side, sibling = n.first + 1 - side;
+      const Bounds3f& box = tree.nodes[child].box;
+      ++stamp;
+      subtree_prims(child, [&](std::uint32_t p) { mark[p] = stamp; });
+      std::vector<std::uint32_t> foreign;
+      auto consider = [&](std::uint32_t p) {
+        if (p < triangles && mark[p] != stamp && g.box[p].overlaps(box)) {
+          mark[p] = stamp;  // once, even if referenced twice
+          foreign.push_back(p);
+        }
+      };
+      for (std::uint32_t p : it.foreign) consider(p);
+      subtree_prims(sibling, consider);
+      todo.push_back({child, std::move(foreign)});
+    }
+  }
+  return epo / g.total_area;
+}
+
+TreeFeatures bvh2_features(const Bvh2& tree, std::size_t bytes) {
+  SurfaceSums sums(surface_area_d(tree.nodes[0].box), bytes);
+  struct Item {
+    std::uint32_t node;
+    int depth;
+  };
+  std::vector<Item> todo = {{0, 0}};
+  while (!todo.empty()) {
+    const Item it = todo.back();
+    todo.pop_back();
+    const Bvh2Node& n = tree.nodes[it.node];
+    if (n.is_leaf()) {
+      sums.leaf(surface_area_d(n.box), n.count, it.depth);
+      continue;
+    }
+    sums.inner(surface_area_d(n.box), it.depth);
+    todo.push_back({n.first, it.depth + 1});
+    todo.push_back({n.first + 1, it.depth + 1});
+  }
+  return sums.features();
+}
+
+template <int N>
+TreeFeatures wide_bvh_features(const WideBvh<N>& wide) {
+  SurfaceSums sums(surface_area_d(wide.root_box), wide.bytes());
+  struct Item {
+    std::uint32_t ref;
+    Bounds3f box;
+    int depth;
+  };
+  std::vector<Item> todo = {{0, wide.root_box, 0}};
+  while (!todo.empty()) {
+    const Item it = todo.back();
+    todo.pop_back();
+    if (WideRef::is_leaf(it.ref)) {
+      std::size_t prims = 0;
+      const std::uint32_t first = WideRef::first(it.ref);
+      for (std::uint32_t p = first; p < first + WideRef::count(it.ref); ++p) prims += wide.packets[p].size();
+      sums.leaf(surface_area_d(it.box), prims, it.depth, WideRef::count(it.ref));  // one group per packet
+      continue;
+    }
+    const WideBvhNode<N>& node = wide.nodes[it.ref];
+    sums.inner(surface_area_d(it.box), it.depth);
+    for (std::uint32_t i = 0; i < node.used; ++i) todo.push_back({node.child[i], node.box(static_cast<int>(i)), it.depth + 1});
+  }
+  return sums.features();
+}
+
+TreeFeatures bvh_features(const Bvh& bvh, const Scene& scene) {
+  const Bvh2& tree = bvh.tree();
+  if (tree.nodes.empty()) throw InputError("tree features: the BVH is empty");
+  TreeFeatures f = bvh.config().width == 4   ? wide_bvh_features(bvh.wide4())
+                   : bvh.config().width == 8 ? wide_bvh_features(bvh.wide8())
+                                             : bvh2_features(tree, bvh.stats().bytes);
+  f.epo = bvh2_epo(tree, scene);
+  return f;
+}
+
+TreeFeatures grid_features(const UniformGrid& grid) {
+  const GridGeometry& g = grid.geometry();
+  SurfaceSums sums(surface_area_d(g.box), grid.stats().bytes);
+  for (int k = 0; k < g.res[2]; ++k)
+    for (int j = 0; j < g.res[1]; ++j)
+      for (int i = 0; i < g.res[0]; ++i) {
+        const double area = surface_area_d(g.cell_box(i, j, k));
+        sums.inner(area, 0);
+        sums.leaf(area, grid.cells().count(g.index(i, j, k)), 0);
+      }
+  return sums.features();
+}
+
+TreeFeatures nested_grid_features(const NestedGrid& grid) {
+  SurfaceSums sums(surface_area_d(grid.bounds()), grid.stats().bytes);
+  grid.for_each_cell([&](const Bounds3f& box, std::uint32_t count, bool) {
+    const double area = surface_area_d(box);
+    sums.inner(area, 0);
+    sums.leaf(area, count, 0);
+  });
+  sums.features().depth = static_cast<int>(grid.level_count());
+  return sums.features();
+}
+
+using Extractor = std::function<TreeFeatures(const Aggregate&, const Scene&)>;
+
+/// One extractor per structure, by Aggregate::name(): a new structure adds its line here.
+const std::map<std::string, Extractor>& extractors() {
+  static const std::map<std::string, Extractor> table = {
+      {"kdtree", [](const Aggregate& a, const Scene&) { return kdtree_features(dynamic_cast<const KdTree&>(a)); }},
+      {"octree", [](const Aggregate& a, const Scene&) { return octree_features(dynamic_cast<const Octree&>(a)); }},
+      {"bsp", [](const Aggregate& a, const Scene&) { return bsp_features(dynamic_cast<const BspTree&>(a)); }},
+      {"bvh", [](const Aggregate& a, const Scene& s) { return bvh_features(dynamic_cast<const Bvh&>(a), s); }},
+      {"grid", [](const Aggregate& a, const Scene&) { return grid_features(dynamic_cast<const UniformGrid&>(a)); }},
+      {"nested-grid",
+       [](const Aggregate& a, const Scene&) { return nested_grid_features(dynamic_cast<const NestedGrid&>(a)); }},
+      {"brute",
+       [](const Aggregate&, const Scene& s) {
+         TreeFeatures f;
+         f.leaves = 1;
+         f.references = s.primitive_count();
+         f.expected_leaves = 1.0;
+         f.expected_tests = static_cast<double>(s.primitive_count());
+         f.expected_test_groups = static_cast<double>((s.primitive_count() + 3) / 4);
+         return f;
+       }},
+  };
+  return table;
+}
+
+}  // namespace
+
+std::string structure_family(const std::string& accel_spec) {
+  SpecReader reader(parse_spec(accel_spec));
+  const std::string name = reader.spec().name;
+  find_accelerator_kind(name);
+  if (name != "bvh") return name;
+  const int width = read_bvh_config(reader).width;
+  return width == 2 ? "bvh" : "bvh" + std::to_string(width);
+}
+
+const std::vector<std::string>& feature_families() {
+  static const std::vector<std::string> families = {"bvh",    "bvh4", "bvh8",        "kdtree",
+                                                    "octree", "bsp",  "grid",        "nested-grid", "brute"};
+  return families;
+}
+
+TreeFeatures tree_features(const Aggregate& accel, const Scene& scene) {
+  if (scene.instanced())
+    throw InputError("tree features: instanced scene '" + scene.spec + "' (features describe one structure; use its base)");
+  const auto it = extractors().find(accel.name());
+  if (it == extractors().end())
+    throw InputError("tree features: accelerator '" + accel.name() + "' has no structure raylab can read");
+  return it->second(accel, scene);
+}
+
+void fill_tree_features(RunRecord& r, const TreeFeatures& f) {
+  r.e_inner = f.expected_inner;
+  r.e_leaves = f.expected_leaves;
+  r.e_tests = f.expected_tests;
+  r.e_test_groups = f.expected_test_groups;
+  r.sah_1_1 = f.sah_1_1();
+  r.epo = f.epo;
+  r.inner_nodes = static_cast<std::int64_t>(f.inner_nodes);
+  r.leaves = static_cast<std::int64_t>(f.leaves);
+  r.references = static_cast<std::int64_t>(f.references);
+  r.depth = f.depth;
+  r.bytes = static_cast<std::int64_t>(f.bytes);
+}
+
+RunRecord record_for_prediction(const TreeFeatures& f, const std::string& ray_kind, double primitives) {
+  RunRecord r;
+  r.ray_kind = ray_kind;
+  r.query = is_any_hit_ray_spec(ray_kind) ? "occluded" : "intersect";
+  r.primitives = static_cast<std::int64_t>(primitives);
+  const Provenance& p = provenance_of_this_process();
+  r.l2_bytes = p.l2_bytes;
+  r.llc_bytes = p.llc_bytes;
+  fill_tree_features(r, f);
+  return r;
+}
+
+}  // namespace raylab

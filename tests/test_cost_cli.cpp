@@ -1,0 +1,198 @@
+// `raylab sweep`, `fit` and `predict` as a user runs them: bad input gives one error line, exit
+// status 2 and no output file; a sweep killed mid-way resumes without losing a row; `predict
+// --measure` traces a case as the sweep does; `trace --accel auto` says what it chose.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "cost/run_record.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch_dir() {
+  const auto dir = fs::temp_directory_path() / ("raylab_cost_cli_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct ToolRun {
+  int status = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+ToolRun run_tool(const std::string& args) {
+  const auto out = scratch_dir() / "stdout", err = scratch_dir() / "stderr";
+  const std::string cmd = std::string(RAYLAB_TOOL_PATH) + " " + args + " >" + out.string() + " 2>" + err.string() + " </dev/null";
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const auto p = scratch_dir() / name;
+  std::ofstream(p, std::ios::trunc) << text;
+  return p.string();
+}
+
+std::size_t data_rows(const fs::path& csv) {
+  const std::string text = slurp(csv);
+  const auto lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+  return lines > 0 ? lines - 1 : 0;
+}
+
+const char* kSmallPlan = R"({"scenes": ["sphere:n=400", "walls:n=10,angle=30"],
+  "accels": ["bvh", "bvh:width=2", "kdtree", "grid", "octree"], "rays": ["primary:4096", "diffuse:4096"]})";
+
+void expect_one_error_line(const ToolRun& r, const std::string& what) {
+  EXPECT_EQ(r.status, 2) << what << "\n" << r.err;
+  EXPECT_EQ(r.err.rfind("raylab: error: ", 0), 0u) << what << ": " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << what << ": " << r.err;
+}
+
+TEST(CostCli, BadInputGivesOneErrorLineAndNoOutputFile) {
+  const std::string plan = write_file("plan.json", kSmallPlan);
+  const std::string bad_plan = write_file("bad_plan.json", R"({"scenes": ["sphere:n=10"], "accels": ["embree"], "rays": ["primary:8"]})");
+  const std::string not_json = write_file("not_json.json", "{\"scenes\": [");
+  const std::string bad_runs = write_file("bad_runs.csv", "case,scene\n0,x\n");
+  const std::string header_only = write_file("empty_runs.csv", raylab::runs_csv_header() + "\n");
+  const std::string bad_model = write_file("bad_model.json", R"({"format": "raylab-cost-model", "version": 99})");
+  const fs::path out = scratch_dir() / "never_written";
+  const std::vector<std::string> cases = {
+      "sweep --plan /no/such/plan.json --out " + out.string(),
+      "sweep --plan " + bad_plan + " --out " + out.string(),
+      "sweep --plan " + not_json + " --out " + out.string(),
+      "sweep --plan " + plan + " --out " + out.string() + " --shard 3/2",
+      "sweep --plan " + plan + " --out " + out.string() + " --shard x",
+      "sweep --plan " + plan + " --out " + out.string() + " --passes 2",
+      "fit --runs /no/such/runs.csv --out " + out.string(),
+      "fit --runs " + bad_runs + " --out " + out.string(),
+      "fit --runs " + header_only + " --out " + out.string(),
+      "fit --runs " + header_only + " --out " + out.string() + " --target fastest",
+      "predict --model " + bad_model + " --scene sphere:n=100 --accel kdtree",
+      "predict --model /no/such/model.json --scene sphere:n=100 --accel kdtree",
+      "predict --model default --scene sphere:n=100 --accel embree",
+      "predict --model default --scene sphere:n=100 --accel kdtree:c_isect=nan",
+      "trace --scene sphere:n=100 --accel auto:model=" + bad_model,
+      "trace --scene sphere:n=100 --accel kdtree:cost=" + bad_model,
+      "trace --scene sphere:n=100 --accel kdtree:cost=default,c_isect=2",
+  };
+  for (const auto& args : cases) {
+    expect_one_error_line(run_tool(args), args);
+    EXPECT_FALSE(fs::exists(out)) << args;
+  }
+}
+
+TEST(CostCli, ExistingOutputWithoutResumeIsRefusedAndKept) {
+  const std::string plan = write_file("plan_keep.json", kSmallPlan);
+  const std::string out = write_file("keep.csv", "not a runs file\n");
+  expect_one_error_line(run_tool("sweep --plan " + plan + " --out " + out), "existing out");
+  EXPECT_EQ(slurp(out), "not a runs file\n");
+  expect_one_error_line(run_tool("sweep --plan " + plan + " --out " + out + " --resume"), "resume of a non-runs file");
+  EXPECT_EQ(slurp(out), "not a runs file\n");
+}
+
+TEST(CostCli, AKilledSweepResumesWithoutLosingARow) {
+  const std::string plan = write_file("plan_kill.json", kSmallPlan);
+  const fs::path out = scratch_dir() / "killed.csv";
+  fs::remove(out);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    dup2(devnull, 2);
+    execl(RAYLAB_TOOL_PATH, RAYLAB_TOOL_PATH, "sweep", "--plan", plan.c_str(), "--out", out.c_str(), nullptr);
+    _exit(127);
+  }
+  // Kill it as soon as three rows are on disk.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (data_rows(out) < 3 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the sweep ended before it could be killed";
+  const std::string before = slurp(out);
+  const std::size_t kept = data_rows(out);
+  ASSERT_GE(kept, 3u);
+
+  const ToolRun r = run_tool("sweep --plan " + plan + " --out " + out.string() + " --resume");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<raylab::RunRecord> rows = raylab::read_runs_csv(out.string());
+  ASSERT_EQ(rows.size(), 20u);  // 2 scenes x 5 accels x 2 ray sets
+  std::vector<bool> seen(20, false);
+  for (const auto& row : rows) {
+    ASSERT_LT(row.case_number, 20);
+    EXPECT_FALSE(seen[static_cast<std::size_t>(row.case_number)]) << "case " << row.case_number << " twice";
+    seen[static_cast<std::size_t>(row.case_number)] = true;
+  }
+  // The rows written before the kill are still there, unchanged (a torn last line aside).
+  const std::string after = slurp(out);
+  const std::string complete_before = before.substr(0, before.rfind('\n') + 1);
+  EXPECT_EQ(after.compare(0, complete_before.size(), complete_before), 0);
+}
+
+TEST(CostCli, PredictMeasuresACaseAsTheSweepDoesAndFitPrintsItsConstants) {
+  const std::string plan = write_file("plan_predict.json", kSmallPlan);
+  const fs::path runs = scratch_dir() / "predict_runs.csv", model = scratch_dir() / "predict_model.json";
+  fs::remove(runs);
+  fs::remove(model);
+  ASSERT_EQ(run_tool("sweep --plan " + plan + " --out " + runs.string()).status, 0);
+  const ToolRun fit = run_tool("fit --runs " + runs.string() + " --out " + model.string());
+  ASSERT_EQ(fit.status, 0) << fit.err;
+  EXPECT_NE(fit.out.find("held-out MAPE"), std::string::npos) << fit.out;
+  EXPECT_NE(fit.out.find("±"), std::string::npos) << fit.out;
+  EXPECT_NE(fit.out.find("measured C_trav:C_isect"), std::string::npos) << fit.out;
+  ASSERT_TRUE(fs::exists(model));
+
+  // Case 5 of the plan: (sphere:n=400, kdtree, diffuse:4096).
+  const std::vector<raylab::RunRecord> rows = raylab::read_runs_csv(runs.string());
+  const auto row = std::find_if(rows.begin(), rows.end(), [](const auto& r) { return r.case_number == 5; });
+  ASSERT_NE(row, rows.end());
+  ASSERT_EQ(row->accel, "kdtree");
+  const ToolRun p = run_tool("predict --model " + model.string() +
+                             " --scene sphere:n=400 --accel kdtree --rays diffuse:4096 --measure --json");
+  ASSERT_EQ(p.status, 0) << p.err;
+  const auto j = nlohmann::json::parse(p.out);
+  for (const char* key : {"predicted_ns_per_ray", "measured_ns_per_ray", "predicted_from_counters_ns_per_ray"})
+    EXPECT_GT(j.at(key).get<double>(), 0.0) << key;
+  // The same rays through the same tree: the counted pass agrees to the last ray.
+  EXPECT_DOUBLE_EQ(j.at("nodes_per_ray").get<double>(), row->nodes_per_ray);
+  EXPECT_DOUBLE_EQ(j.at("tests_per_ray").get<double>(), row->tests_per_ray);
+  EXPECT_GE(j.at("passes").get<int>(), 5);
+  EXPECT_GE(row->passes, 5);
+  // Far outside the data (a hundred times the primitives) it refuses unless told otherwise.
+  const std::string big = "predict --model " + model.string() + " --scene sphere:n=100000 --accel kdtree";
+  expect_one_error_line(run_tool(big), big);
+  EXPECT_EQ(run_tool(big + " --allow-extrapolation").status, 0);
+}
+
+TEST(CostCli, TraceOfAutoPrintsItsChoice) {
+  const ToolRun r = run_tool("trace --scene sphere:n=500 --accel auto --rays primary:1024 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j.contains("auto_choice")) << r.out;
+  const auto& c = j["auto_choice"];
+  EXPECT_FALSE(c.at("chosen").get<std::string>().empty());
+  EXPECT_NE(c.at("model").get<std::string>().find("default_model.json"), std::string::npos);
+  EXPECT_GE(c.at("candidates").size(), 8u);
+}
+
+}  // namespace

@@ -1,0 +1,434 @@
+// The cost-model layer (lib/cost): Ceres fits recover known constants within their reported
+// standard errors, model selection picks the terms that made the data, the data set's CSV and
+// the model file round-trip and reject bad input, shards of a sweep equal the whole sweep, the
+// builders take fitted constants, and `auto` chooses among the lab's structures.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/hit_comparison.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
+#include "cost/auto_accel.h"
+#include "cost/fit.h"
+#include "cost/model_file.h"
+#include "cost/model_fit.h"
+#include "cost/model_selection.h"
+#include "cost/run_record.h"
+#include "cost/sweep.h"
+#include "cost/tree_features.h"
+#include "geometry/input_error.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+std::filesystem::path scratch(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("raylab_cost_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+/// Runs of one structure family over `scenes` scenes whose time is made by known constants:
+/// ns = 20 + 1.5·nodes + 6·leaves + 3·tests + c_hit·hits, times (1 + 2% Gaussian noise).
+std::vector<RunRecord> synthetic_runs(double c_hit, std::uint32_t seed, int scenes = 8, int per_scene = 12) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> nodes(5, 60), leaves(1, 10), tests(2, 40), hits(0.2, 3);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<RunRecord> runs;
+  for (int s = 0; s < scenes; ++s)
+    for (int i = 0; i < per_scene; ++i) {
+      RunRecord r;
+      r.case_number = static_cast<std::int64_t>(runs.size());
+      r.scene = "scene" + std::to_string(s);
+      r.scene_family = s % 2 ? "odd" : "even";
+      r.accel = "kdtree";
+      r.family = "kdtree";
+      r.rays = "primary:100";
+      r.ray_kind = "primary";
+      r.query = "intersect";
+      r.nodes_per_ray = nodes(rng);
+      r.leaves_per_ray = leaves(rng);
+      r.tests_per_ray = tests(rng);
+      r.hits_per_ray = hits(rng);
+      const double ns = 20 + 1.5 * r.nodes_per_ray + 6 * r.leaves_per_ray + 3 * r.tests_per_ray + c_hit * r.hits_per_ray;
+      r.ns_per_ray_min = ns * (1 + noise(rng));
+      runs.push_back(r);
+    }
+  return runs;
+}
+
+TEST(CostFit, RecoversKnownConstantsWithinTwoStandardErrors) {
+  const std::vector<RunRecord> runs = synthetic_runs(0.0, 7);
+  FitResult details;
+  const FittedCostModel m = fit_cost_model(ModelLevel::counters, {"c0", "node", "leaf", "test"}, runs, {}, &details);
+  EXPECT_TRUE(details.converged) << details.message;
+  const double truth[] = {20, 1.5, 6, 3};
+  for (std::size_t j = 0; j < 4; ++j) {
+    ASSERT_TRUE(std::isfinite(m.std_errors[j])) << m.terms[j];
+    EXPECT_GT(m.std_errors[j], 0.0) << m.terms[j];
+    EXPECT_LE(std::abs(m.values[j] - truth[j]), 2 * m.std_errors[j])
+        << m.terms[j] << " = " << m.values[j] << " ± " << m.std_errors[j] << ", true " << truth[j];
+  }
+  EXPECT_LT(details.mape, 0.03);
+  EXPECT_GT(details.r2, 0.98);
+}
+
+TEST(CostFit, RobustLossKeepsOutliersFromPullingTheFit) {
+  std::vector<RunRecord> runs = synthetic_runs(0.0, 11);
+  for (std::size_t i = 0; i < runs.size(); i += 17) runs[i].ns_per_ray_min *= 3;  // a few disturbed timings
+  FitOptions plain;
+  plain.loss_scale = 0;
+  const FittedCostModel robust = fit_cost_model(ModelLevel::counters, {"c0", "node", "leaf", "test"}, runs, {});
+  const FittedCostModel squares = fit_cost_model(ModelLevel::counters, {"c0", "node", "leaf", "test"}, runs, plain);
+  EXPECT_LT(std::abs(robust.value_of("test") - 3), std::abs(squares.value_of("test") - 3));
+  EXPECT_NEAR(robust.value_of("test"), 3.0, 0.3);
+}
+
+TEST(CostFit, PowerLawAndBasisFitsRecoverTheirCurves) {
+  std::vector<double> n, y_pow, y_log;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (double x = 1024; x <= (1 << 20); x *= 2) {
+    n.push_back(x);
+    y_pow.push_back(3.0 * std::pow(x, 0.75) * (1 + noise(rng)));
+    y_log.push_back((40.0 + 7.0 * std::log2(x)) * (1 + noise(rng)));
+  }
+  const FitResult p = fit_power_law(n, y_pow);
+  EXPECT_LE(std::abs(p.values[1] - 0.75), 2 * p.std_errors[1]) << p.values[1] << " ± " << p.std_errors[1];
+  const FitResult l = fit_basis(n, y_log, [](double x) { return std::log2(x); });
+  EXPECT_LE(std::abs(l.values[1] - 7.0), 2 * l.std_errors[1]) << l.values[1] << " ± " << l.std_errors[1];
+  EXPECT_LE(std::abs(l.values[0] - 40.0), 2 * l.std_errors[0]) << l.values[0] << " ± " << l.std_errors[0];
+}
+
+TEST(CostFit, RejectsInputItCannotFit) {
+  EXPECT_THROW(fit_linear_terms({}, {}), InputError);
+  EXPECT_THROW(fit_linear_terms({{1, 2}}, {3}), InputError);                // fewer points than terms
+  EXPECT_THROW(fit_linear_terms({{1}, {2}}, {1, NAN}), InputError);         // non-finite
+  EXPECT_THROW(fit_linear_terms({{1}, {2}}, {1, -1}), InputError);          // relative residuals need y > 0
+  EXPECT_THROW(fit_power_law({1, 2, 3}, {1, 0, 2}), InputError);
+}
+
+TEST(CostModelSelection, KeepsTheTermsThatMadeTheDataAndDropsOneThatDidNot) {
+  // Without a hit term in the truth, `hit` lowers no held-out error and is dropped.
+  const TermSelection without = select_terms(ModelLevel::counters, synthetic_runs(0.0, 5), {});
+  EXPECT_TRUE(without.cross_validated);
+  for (const char* t : {"c0", "node", "leaf", "test"})
+    EXPECT_NE(std::find(without.terms.begin(), without.terms.end(), t), without.terms.end()) << t;
+  EXPECT_EQ(std::find(without.terms.begin(), without.terms.end(), "hit"), without.terms.end());
+  EXPECT_NE(std::find(without.dropped.begin(), without.dropped.end(), "hit"), without.dropped.end());
+  // Features that are zero on every run are not candidates at all.
+  EXPECT_NE(std::find(without.unused.begin(), without.unused.end(), "mailbox"), without.unused.end());
+  // With a real hit cost in the data, `hit` is kept.
+  const TermSelection with = select_terms(ModelLevel::counters, synthetic_runs(25.0, 5), {});
+  EXPECT_NE(std::find(with.terms.begin(), with.terms.end(), "hit"), with.terms.end());
+  EXPECT_LT(with.held_out.mape, 0.03);
+  EXPECT_EQ(with.by_scene_family.size(), 2u);
+}
+
+TEST(CostModelSelection, SpearmanRanksWithTies) {
+  EXPECT_DOUBLE_EQ(spearman_rank_correlation({1, 2, 3, 4}, {10, 20, 30, 40}), 1.0);
+  EXPECT_DOUBLE_EQ(spearman_rank_correlation({1, 2, 3, 4}, {4, 3, 2, 1}), -1.0);
+  EXPECT_NEAR(spearman_rank_correlation({1, 2, 2, 3}, {1, 2, 3, 4}), 0.9487, 1e-4);
+  EXPECT_TRUE(std::isnan(spearman_rank_correlation({1, 1}, {1, 2})));
+}
+
+TEST(CostRuns, CsvRoundTripsEveryColumnAndRejectsMalformedRows) {
+  std::vector<RunRecord> runs = synthetic_runs(0.0, 2, 2, 3);
+  runs[0].scene = "stadium:object=(sphere:n=10),ratio=5";  // commas and parentheses: quoted
+  runs[1].cpu_model = "CPU \"quoted\" model";
+  runs[2].ns_per_ray_min = 0.1 + 0.2;  // needs 17 digits to round-trip
+  const auto path = scratch("roundtrip.csv").string();
+  {
+    std::ofstream out(path);
+    out << runs_csv_header() << '\n';
+    for (const RunRecord& r : runs) out << to_csv_row(r) << '\n';
+  }
+  const std::vector<RunRecord> back = read_runs_csv(path);
+  ASSERT_EQ(back.size(), runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) EXPECT_EQ(to_csv_row(back[i]), to_csv_row(runs[i]));
+  EXPECT_EQ(back[2].ns_per_ray_min, runs[2].ns_per_ray_min);
+
+  auto write = [&](const std::string& text) {
+    std::ofstream(path, std::ios::trunc) << text;
+    return path;
+  };
+  const std::string row = to_csv_row(runs[1]);
+  EXPECT_THROW(read_runs_csv(write("")), InputError);
+  EXPECT_THROW(read_runs_csv(write("case,scene\n1,x\n")), InputError);              // columns missing
+  EXPECT_THROW(read_runs_csv(write(runs_csv_header() + "\n")), InputError);          // no rows
+  EXPECT_NO_THROW(read_runs_csv(write(runs_csv_header() + "\n"), true));
+  EXPECT_THROW(read_runs_csv(write(runs_csv_header() + "\n" + row)), InputError);    // last line unterminated
+  std::string bad_number = row;
+  bad_number.replace(bad_number.rfind(','), std::string::npos, ",nan");
+  try {
+    read_runs_csv(write(runs_csv_header() + "\n" + bad_number + "\n"));
+    ADD_FAILURE() << "a NaN field was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(":2:"), std::string::npos) << e.what();  // names the line
+  }
+}
+
+TEST(CostSweep, PlansAndShardsAreValidated) {
+  EXPECT_EQ(parse_shard("0/1").count, 1);
+  EXPECT_EQ(parse_shard("3/4").index, 3);
+  for (const char* bad : {"3/2", "1/0", "-1/2", "a/b", "2", "0/", "/3"}) EXPECT_THROW(parse_shard(bad), InputError) << bad;
+
+  auto plan_file = [](const std::string& text) {
+    const auto p = scratch("plan.json").string();
+    std::ofstream(p, std::ios::trunc) << text;
+    return p;
+  };
+  const char* bad_plans[] = {
+      "{",                                                                                 // malformed JSON
+      R"({"scenes": ["soup:n=10"], "accels": ["bvh"]})",                                    // missing key
+      R"({"scenes": [], "accels": ["bvh"], "rays": ["primary:4"]})",                         // empty list
+      R"({"scenes": ["soup:n=10"], "accels": ["bvh", "bvh"], "rays": ["primary:4"]})",       // repeated
+      R"({"scenes": ["soup:n=10"], "accels": ["embree"], "rays": ["primary:4"]})",           // no features
+      R"({"scenes": ["soup:n=10"], "accels": ["bvh:nonsense=1"], "rays": ["primary:4"]})",   // bad parameter
+      R"({"scenes": ["nowhere:n=1"], "accels": ["bvh"], "rays": ["primary:4"]})",            // unknown scene
+      R"({"scenes": ["soup:n=10"], "accels": ["bvh"], "rays": ["beams:4"]})",                // unknown rays
+      R"({"scenes": ["soup:n=10"], "accels": ["bvh"], "rays": ["primary:4"], "extra": 1})",  // unknown key
+      R"({"scenes": ["soup:n=10"], "accels": [3], "rays": ["primary:4"]})",                  // not a string
+  };
+  for (const char* text : bad_plans) EXPECT_THROW(load_plan(plan_file(text)), InputError) << text;
+  EXPECT_THROW(load_plan("/no/such/plan.json"), InputError);
+  const SweepPlan quick = load_plan("quick");
+  EXPECT_GT(quick.case_count(), 100);
+  const SweepPlan p = load_plan(plan_file(R"({"scenes": ["sphere:n=10", "soup:n=10"], "accels": ["bvh", "kdtree", "grid"],
+                                              "rays": ["primary:4", "diffuse:4"]})"));
+  EXPECT_EQ(p.case_count(), 12);
+  const SweepCase c = p.case_at(9);  // (1·3 + 1)·2 + 1
+  EXPECT_EQ(c.scene, "soup:n=10");
+  EXPECT_EQ(c.accel, "kdtree");
+  EXPECT_EQ(c.rays, "diffuse:4");
+}
+
+/// A small plan whose sweep takes a few seconds.
+SweepPlan small_plan() {
+  SweepPlan p;
+  p.source = "test";
+  p.scenes = {"sphere:n=300", "walls:n=8,angle=20"};
+  p.accels = {"bvh", "kdtree", "grid"};
+  p.rays = {"primary:1024", "shadow:512"};
+  return p;
+}
+
+std::vector<RunRecord> sweep_into(const SweepPlan& plan, const std::string& out, ShardSpec shard) {
+  SweepOptions o;
+  o.out = out;
+  o.shard = shard;
+  o.timing.min_seconds = 0;
+  std::filesystem::remove(out);
+  run_sweep(plan, o);
+  return read_runs_csv(out);
+}
+
+/// The columns a repeated measurement must reproduce exactly: identity, counters and features.
+std::string deterministic_part(RunRecord r) {
+  r.ns_per_ray_min = r.ns_per_ray_median = r.embree_ns_per_ray_min = r.build_s = 0;
+  r.passes = 0;
+  return to_csv_row(r);
+}
+
+TEST(CostSweep, ShardsConcatenateToTheUnshardedDataSet) {
+  const SweepPlan plan = small_plan();
+  const std::vector<RunRecord> whole = sweep_into(plan, scratch("whole.csv").string(), {0, 1});
+  ASSERT_EQ(static_cast<std::int64_t>(whole.size()), plan.case_count());
+  std::vector<RunRecord> merged = sweep_into(plan, scratch("shard0.csv").string(), {0, 2});
+  const std::vector<RunRecord> second = sweep_into(plan, scratch("shard1.csv").string(), {1, 2});
+  for (const RunRecord& r : merged) EXPECT_EQ(r.case_number % 2, 0);
+  merged.insert(merged.end(), second.begin(), second.end());
+  std::sort(merged.begin(), merged.end(), [](const RunRecord& a, const RunRecord& b) { return a.case_number < b.case_number; });
+  ASSERT_EQ(merged.size(), whole.size());
+  for (std::size_t i = 0; i < whole.size(); ++i) {
+    EXPECT_EQ(deterministic_part(merged[i]), deterministic_part(whole[i]));
+    EXPECT_GE(whole[i].passes, 5);
+    EXPECT_GT(whole[i].ns_per_ray_min, 0);
+    EXPECT_GT(whole[i].embree_ns_per_ray_min, 0);
+    EXPECT_LE(whole[i].ns_per_ray_min, whole[i].ns_per_ray_median);
+  }
+  // Every case of the plan once, with its key.
+  for (std::size_t i = 0; i < whole.size(); ++i) {
+    const SweepCase c = plan.case_at(static_cast<std::int64_t>(i));
+    EXPECT_EQ(whole[i].case_number, static_cast<std::int64_t>(i));
+    EXPECT_EQ(whole[i].scene + whole[i].accel + whole[i].rays, c.scene + c.accel + c.rays);
+  }
+}
+
+TEST(CostSweep, ResumeSkipsFinishedCasesAndRejectsAnotherPlansFile) {
+  const SweepPlan plan = small_plan();
+  const std::string out = scratch("resume.csv").string();
+  SweepOptions o;
+  o.out = out;
+  o.timing.min_seconds = 0;
+  std::filesystem::remove(out);
+  o.shard = {0, 3};
+  run_sweep(plan, o);
+  // An existing file without --resume is an error, and leaves the file as it was.
+  const auto size = std::filesystem::file_size(out);
+  o.shard = {0, 1};
+  EXPECT_THROW(run_sweep(plan, o), InputError);
+  EXPECT_EQ(std::filesystem::file_size(out), size);
+  // A half-written last line (a killed sweep) is dropped and that case measured again.
+  std::ofstream(out, std::ios::app) << "5,sphere:n=300,kdtr";
+  o.resume = true;
+  const SweepSummary s = run_sweep(plan, o);
+  EXPECT_EQ(s.skipped, 4);
+  EXPECT_EQ(s.measured, plan.case_count() - 4);
+  std::vector<RunRecord> rows = read_runs_csv(out);
+  ASSERT_EQ(static_cast<std::int64_t>(rows.size()), plan.case_count());
+  std::sort(rows.begin(), rows.end(), [](const RunRecord& a, const RunRecord& b) { return a.case_number < b.case_number; });
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(rows[i].case_number, static_cast<std::int64_t>(i));
+  // The file of another plan is refused.
+  SweepPlan other = plan;
+  std::swap(other.accels[0], other.accels[1]);
+  EXPECT_THROW(run_sweep(other, o), InputError);
+}
+
+TEST(CostSweep, BadInputLeavesNoFileBehind) {
+  SweepPlan plan = small_plan();
+  plan.scenes = {"/no/such/mesh.off"};
+  SweepOptions o;
+  o.out = scratch("never.csv").string();
+  std::filesystem::remove(o.out);
+  EXPECT_THROW(run_sweep(plan, o), InputError);
+  EXPECT_FALSE(std::filesystem::exists(o.out));
+}
+
+TEST(TreeFeatures, SurfaceAreaExpectationsOfSimpleStructures) {
+  const auto scene = make_scene("soup:n=500");
+  // Brute force: one leaf holding every primitive.
+  const TreeFeatures brute = tree_features(*make_accelerator("brute", scene), *scene);
+  EXPECT_DOUBLE_EQ(brute.expected_tests, 500.0);
+  EXPECT_EQ(brute.inner_nodes, 0u);
+  // A uniform grid: every cell is visited with probability SA(cell)/SA(root).
+  const auto grid = make_accelerator("grid:d=2", scene);
+  const TreeFeatures g = tree_features(*grid, *scene);
+  EXPECT_EQ(g.inner_nodes, grid->stats().nodes);
+  EXPECT_GT(g.expected_inner, 1.0);
+  EXPECT_GE(g.references, 500u);
+  // A kd-tree: the root is visited by every line through its box; spatial subdivisions have no EPO.
+  const TreeFeatures kd = tree_features(*make_accelerator("kdtree", scene), *scene);
+  EXPECT_GE(kd.expected_inner, 1.0);
+  EXPECT_GT(kd.expected_tests, 0.0);
+  EXPECT_LT(kd.expected_tests, 500.0);
+  EXPECT_EQ(kd.epo, 0.0);
+  // BVHs: every width gets its own features, and overlapping boxes give a positive EPO.
+  for (const char* spec : {"bvh:width=2", "bvh:width=4", "bvh:width=8"}) {
+    const TreeFeatures b = tree_features(*make_accelerator(spec, scene), *scene);
+    EXPECT_GT(b.epo, 0.0) << spec;
+    EXPECT_GE(b.expected_inner, 1.0) << spec;
+    EXPECT_LE(b.expected_test_groups, b.expected_tests) << spec;
+  }
+  EXPECT_EQ(structure_family("bvh"), "bvh8");
+  EXPECT_EQ(structure_family("bvh:width=2"), "bvh");
+  EXPECT_EQ(structure_family("kdtree:clip=none"), "kdtree");
+  EXPECT_THROW(tree_features(*make_accelerator("embree", scene), *scene), InputError);
+}
+
+/// A model fitted on synthetic tree-level data with known constants, written to a file.
+std::string synthetic_model_file(const std::string& name, double c_node, double c_test) {
+  std::vector<RunRecord> runs;
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(1, 40);
+  for (const char* family : {"kdtree", "bvh8", "octree", "bsp", "grid"})
+    for (int s = 0; s < 4; ++s)
+      for (int i = 0; i < 6; ++i) {
+        RunRecord r;
+        r.scene = "scene" + std::to_string(s);
+        r.scene_family = "synthetic";
+        r.family = family;
+        r.accel = family;
+        r.rays = "primary:10";
+        r.ray_kind = "primary";
+        r.query = "intersect";
+        r.nodes_per_ray = r.e_inner = u(rng);
+        r.tests_per_ray = r.e_tests = u(rng);
+        r.leaves_per_ray = r.e_leaves = 1;
+        r.ns_per_ray_min = 10 + c_node * r.e_inner + c_test * r.e_tests;
+        runs.push_back(r);
+      }
+  const CostModelSet set = fit_cost_model_set(runs, {}, FitTarget::minimum);
+  const std::string path = scratch(name).string();
+  write_model_file(set, path);
+  return path;
+}
+
+TEST(CostModelFile, RoundTripsAndRejectsOtherVersionsAndMissingFamilies) {
+  const std::string path = synthetic_model_file("model.json", 2.0, 8.0);
+  const CostModelSet back = read_model_file(path);
+  const FamilyModel& kd = back.family("kdtree");
+  EXPECT_NEAR(kd.counters.model.value_of("test") / kd.counters.model.value_of("node"), 4.0, 0.05);
+  EXPECT_NEAR(kd.builder.c_isect / kd.builder.c_trav, 4.0, 0.05);
+  EXPECT_THROW(back.family("nested-grid"), InputError);
+
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  auto variant = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    t.replace(at, from.size(), to);
+    const std::string p = scratch("variant.json").string();
+    std::ofstream(p, std::ios::trunc) << t;
+    return p;
+  };
+  EXPECT_THROW(read_model_file(variant("\"version\": 1", "\"version\": 2")), InputError);
+  EXPECT_THROW(read_model_file(variant("raylab-cost-model", "something-else")), InputError);
+  EXPECT_THROW(read_model_file(variant("\"families\": {", "\"families\": {,")), InputError);
+  EXPECT_THROW(read_model_file(variant("\"c_trav\"", "\"c_travel\"")), InputError);
+  EXPECT_THROW(read_model_file("/no/such/model.json"), InputError);
+}
+
+TEST(CostModelFile, BuildersTakeTheFittedConstants) {
+  const std::string path = synthetic_model_file("builders.json", 1.0, 20.0);
+  const auto scene = make_scene("sphere:n=2000");
+  const FittedSahCost c = load_builder_costs(path, "kdtree");
+  // cost=model builds the tree the same constants give by hand (C_leaf is 0: the data had no leaf cost).
+  const auto fitted = make_accelerator("kdtree:cost=" + path, scene);
+  char manual[128];
+  std::snprintf(manual, sizeof manual, "kdtree:c_trav=%.17g,c_isect=%.17g", c.c_trav, c.c_isect);
+  if (c.c_leaf == 0) EXPECT_EQ(fitted->structure_hash(), make_accelerator(manual, scene)->structure_hash()) << manual;
+  // A ratio of 1:20 builds a deeper tree than the default 1:1.5.
+  EXPECT_GT(fitted->stats().nodes, make_accelerator("kdtree", scene)->stats().nodes);
+  for (const char* spec : {"bvh:cost=", "octree:cost=", "bsp:cost="}) {
+    const auto a = make_accelerator(spec + path, scene);
+    EXPECT_GT(a->stats().nodes, 0u) << spec;
+  }
+  EXPECT_THROW(make_accelerator("kdtree:cost=" + path + ",c_trav=2", scene), InputError);
+  EXPECT_THROW(make_accelerator("nested-grid:cost=" + path, scene), InputError);   // no such parameter
+  EXPECT_THROW(make_accelerator("bvh:width=2,cost=" + path, scene), InputError);   // no bvh (width 2) entry
+  EXPECT_THROW(make_accelerator("kdtree:cost=/no/such.json", scene), InputError);
+}
+
+TEST(AutoAccelerator, ChoosesAStructureThatAgreesWithTheOracle) {
+  const std::string path = synthetic_model_file("auto.json", 1.0, 3.0);
+  const auto scene = make_scene("sphere:n=1000");
+  const auto accel = make_accelerator("auto:model=" + path + ",rays=primary", scene);
+  const auto* chooser = dynamic_cast<const AutoAccelerator*>(accel.get());
+  ASSERT_NE(chooser, nullptr);
+  const AutoChoice& c = chooser->choice();
+  EXPECT_FALSE(c.chosen.empty());
+  // The model covers five families: their candidates are built, predicted, and the cheapest kept.
+  double best = INFINITY;
+  for (const AutoCandidate& k : c.candidates)
+    if (k.skipped.empty()) best = std::min(best, k.predicted_ns_per_ray);
+  EXPECT_EQ(best, c.predicted_ns_per_ray);
+  EXPECT_GE(c.candidates.size(), 8u);
+  const std::vector<Ray> rays = make_ray_set("primary:2048", scene);
+  const auto oracle = make_accelerator("exact", scene);
+  const TraceResult got = trace_rays(*accel, rays, {1});
+  const TraceResult ref = trace_rays(*oracle, rays, {1});
+  EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, length(Vec3d(scene->bounds().diagonal()))).mismatches, 0u);
+  EXPECT_THROW(make_accelerator("auto:model=/no/such.json", scene), InputError);
+  EXPECT_THROW(make_accelerator("auto:model=" + path + ",rays=sideways", scene), InputError);
+}
+
+}  // namespace
+}  // namespace raylab

@@ -1,0 +1,195 @@
+#include "tools/cost_commands.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "cost/model_file.h"
+#include "cost/sweep.h"
+#include "geometry/input_error.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+void progress_line(const std::string& line) { std::cerr << "raylab: " << line << std::endl; }
+
+std::string percent(double fraction) { return fmt::format("{:.1f}%", 100.0 * fraction); }
+
+void print_level(const LevelFit& f, const char* title) {
+  std::cout << fmt::format("  {} model: held-out MAPE {}, R² {:.3f}{}; in-sample MAPE {}, R² {:.3f}; AIC {:.1f}, BIC "
+                           "{:.1f}, condition {:.3g}{}\n",
+                           title, f.cross_validated ? percent(f.held_out_mape) : "n/a", f.held_out_r2,
+                           f.cross_validated ? " (leave one scene out)" : " (one scene: nothing held out)",
+                           percent(f.in_sample_mape), f.in_sample_r2, f.aic, f.bic, f.condition_number,
+                           f.converged ? "" : " NOT CONVERGED");
+  for (std::size_t j = 0; j < f.model.terms.size(); ++j) {
+    const CostTerm& t = find_cost_term(f.model.level, f.model.terms[j]);
+    std::cout << fmt::format("    {:<17} {:>22} ns   {}{}\n", t.name,
+                             format_with_error(f.model.values[j], f.model.std_errors[j]), t.meaning,
+                             j < f.at_bound.size() && f.at_bound[j] ? " [at bound 0]" : "");
+  }
+  auto join = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s.empty() ? std::string("none") : s;
+  };
+  std::cout << "    dropped (no lower held-out error): " << join(f.dropped) << "; zero on every row: " << join(f.unused)
+            << "\n";
+  for (const auto& [family, terms] : f.by_scene_family)
+    std::cout << "    scene family " << family << " needs: " << join(terms) << "\n";
+}
+
+}  // namespace
+
+int run_sweep_command(const SweepCommand& o) {
+  if (o.threads < 1 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 1..1024");
+  if (o.passes < 5 || o.passes > 1000) throw InputError("--passes " + std::to_string(o.passes) + ": expected 5..1000");
+  const ShardSpec shard = parse_shard(o.shard);
+  const SweepPlan plan = load_plan(o.plan);
+  SweepOptions options;
+  options.out = o.out;
+  options.shard = shard;
+  options.resume = o.resume;
+  options.threads = o.threads;
+  options.timing.min_passes = o.passes;
+  options.progress = progress_line;
+  const SweepSummary s = run_sweep(plan, options);
+  progress_line(fmt::format("sweep done: {} cases measured, {} already in {}", s.measured, s.skipped, o.out));
+  return 0;
+}
+
+int run_fit_command(const FitCommand& o) {
+  if (!(o.loss_scale > 0) || !std::isfinite(o.loss_scale))
+    throw InputError("--loss-scale: expected a positive number (the Huber scale, as a fraction)");
+  if (o.out.empty()) throw InputError("fit: --out is required");
+  const std::vector<RunRecord> runs = read_runs_csv(o.runs);
+  std::set<std::string> cpus;
+  for (const RunRecord& r : runs) cpus.insert(r.cpu_model);
+  if (cpus.size() > 1 && !o.allow_mixed_hardware) {
+    std::string list;
+    for (const auto& c : cpus) list += (list.empty() ? "" : "; ") + c;
+    throw InputError(o.runs + ": rows from " + std::to_string(cpus.size()) + " CPU models (" + list +
+                     "): constants do not carry across machines; refit per machine or pass --allow-mixed-hardware");
+  }
+  FitOptions options;
+  options.loss_scale = o.loss_scale;
+  const FitTarget target = parse_fit_target(o.target);
+  CostModelSet set = fit_cost_model_set(runs, options, target,
+                                        o.json ? std::function<void(const std::string&)>{} : progress_line);
+  set.runs_source = o.runs;
+  for (const auto& [name, m] : set.families)
+    for (const LevelFit* f : {&m.counters, &m.tree})
+      if (!f->converged)
+        throw InputError("fit: the " + std::string(level_name(f->model.level)) + " model of '" + name +
+                         "' did not converge; no model written");
+  write_model_file(set, o.out);
+
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["model"] = o.out;
+    j["rows"] = set.rows;
+    for (const auto& [name, m] : set.families) {
+      for (const LevelFit* f : {&m.counters, &m.tree}) {
+        auto& e = j["families"][name][level_name(f->model.level)];
+        e["held_out_mape"] = f->held_out_mape;
+        e["held_out_r2"] = f->held_out_r2;
+        e["terms"] = f->model.terms;
+        e["values"] = f->model.values;
+      }
+    }
+    std::cout << j.dump() << "\n";
+    return 0;
+  }
+  std::cout << fmt::format("cost model of {} ({} rows, CPU {}): target {}, Huber loss scale {} on relative residuals\n",
+                           o.runs, set.rows, *cpus.begin(), target_name(target), o.loss_scale);
+  for (const auto& [name, m] : set.families) {
+    std::cout << fmt::format("\n{}: {} rows over {} scenes\n", name, m.rows, m.scenes.size());
+    print_level(m.counters, "counters");
+    const double node = m.counters.model.value_of("node"), test = m.counters.model.value_of("test");
+    if (node > 0 && test > 0)
+      std::cout << fmt::format("    measured C_trav:C_isect = 1:{:.2f} (the lecture: 1:80 in pbrt, 1:1.5 optimized)\n",
+                               test / node);
+    print_level(m.tree, "tree");
+    std::cout << fmt::format("  builder constants (cost={}): c_trav {:.3g}, c_leaf {:.3g}, c_isect {:.3g} ns, from the {} "
+                             "model\n",
+                             o.out, m.builder.c_trav, m.builder.c_leaf, m.builder.c_isect, m.builder_source);
+  }
+  std::cout << "\nwrote " << o.out << "\n";
+  return 0;
+}
+
+int run_predict_command(const PredictCommand& o) {
+  if (o.threads < 1 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 1..1024");
+  if (o.passes < 5 || o.passes > 1000) throw InputError("--passes " + std::to_string(o.passes) + ": expected 5..1000");
+  const CostModelSet models = read_model_file(o.model);
+  {
+    SpecReader reader(parse_spec(o.accel));
+    reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);
+  }
+  const std::string family = structure_family(o.accel);
+  const FamilyModel& model = models.family(family);
+  const std::string ray_kind = parse_spec(o.rays).name;
+
+  const auto scene = make_scene(o.scene);
+  if (scene->instanced()) throw InputError("predict: scene '" + o.scene + "' is instanced; predict on its base scene");
+  const BuiltStructure built = build_structure(o.accel, scene, o.threads);
+  const RunRecord features = record_for_prediction(built.features, ray_kind, scene->total_primitive_count());
+
+  // Refuse to extrapolate far beyond the data the model was fitted on.
+  std::vector<std::string> outside;
+  auto check = [&](const std::string& key, double v) {
+    const auto it = model.ranges.find(key);
+    if (it != model.ranges.end() && (v > 2.0 * it->second.hi || v < 0.5 * it->second.lo))
+      outside.push_back(fmt::format("{} {:.4g} (fitted on {:.4g}..{:.4g})", key, v, it->second.lo, it->second.hi));
+  };
+  check("primitives", static_cast<double>(features.primitives));
+  check("e_inner", features.e_inner);
+  check("e_tests", features.e_tests);
+  if (!outside.empty() && !o.allow_extrapolation) {
+    std::string list;
+    for (const auto& s : outside) list += (list.empty() ? "" : "; ") + s;
+    throw InputError("predict: " + family + " is more than a factor 2 outside the model's data: " + list +
+                     " (pass --allow-extrapolation to predict anyway)");
+  }
+
+  nlohmann::ordered_json j;
+  j["model"] = resolve_model_path(o.model);
+  j["scene"] = o.scene;
+  j["accel"] = o.accel;
+  j["rays"] = o.rays;
+  j["family"] = family;
+  j["predicted_ns_per_ray"] = model.tree.model.predict(features);
+  j["extrapolated"] = !outside.empty();
+  if (o.measure) {
+    const std::vector<Ray> rays = make_ray_set(o.rays, scene);
+    const auto embree = make_accelerator("embree", scene);
+    TimingOptions timing;
+    timing.threads = o.threads;
+    timing.min_passes = o.passes;
+    timing.any_hit = is_any_hit_ray_spec(o.rays);
+    const RunRecord measured = measure_case({0, o.scene, o.accel, o.rays}, *scene, built, *embree, rays, timing);
+    j["measured_ns_per_ray"] = measured.ns_per_ray_min;
+    j["measured_ns_per_ray_median"] = measured.ns_per_ray_median;
+    j["passes"] = measured.passes;
+    j["embree_ns_per_ray"] = measured.embree_ns_per_ray_min;
+    j["predicted_from_counters_ns_per_ray"] = model.counters.model.predict(measured);
+    j["nodes_per_ray"] = measured.nodes_per_ray;
+    j["tests_per_ray"] = measured.tests_per_ray;
+  }
+  j["build_s"] = built.build_s;
+  if (o.json) {
+    std::cout << j.dump() << "\n";
+  } else {
+    for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << it.value().dump() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace raylab
