@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "accel/common/tracer.h"
+#include "cost/csv.h"
 #include "geometry/input_error.h"
 
 namespace raylab::experiments {
@@ -20,6 +21,7 @@ namespace raylab::experiments {
 struct Options {
   std::string mode = "quick";  ///< quick: the default `./lab report`; full: `./lab report --full`
   std::string out = "docs/results";
+  std::string runs;  ///< exp_cost_model: take the cost model's data set from this runs CSV instead of sweeping
   bool full() const { return mode == "full"; }
 };
 
@@ -29,6 +31,7 @@ inline Options parse_options(int argc, char** argv, const std::string& descripti
   CLI::App app{description};
   app.add_option("--mode", o.mode, "quick | full")->check(CLI::IsMember({"quick", "full"}));
   app.add_option("--out", o.out, "output directory for CSV and Markdown");
+  app.add_option("--runs", o.runs, "exp_cost_model: a runs CSV (raylab sweep, or a Slurm-merged one) to fit instead of sweeping");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -81,13 +84,7 @@ class CsvWriter {
   }
 
  private:
-  /// Text is quoted (RFC 4180) when it holds a comma, a quote or a line break; numbers pass.
-  static std::string field(const std::string& s) {
-    if (s.find_first_of(",\"\n") == std::string::npos) return s;
-    std::string q = "\"";
-    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-  }
+  static std::string field(const std::string& s) { return csv_field(s); }
   static std::string field(const char* s) { return field(std::string(s)); }
   template <class T>
   static const T& field(const T& v) {

@@ -16,7 +16,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 # Fragments in reading order; any other *.md fragment follows alphabetically.
-ORDER = ["image_log_objects", "oracle_agreement", "grids", "spatial", "bvh", "robustness"]
+ORDER = ["image_log_objects", "oracle_agreement", "grids", "spatial", "bvh", "cost_model", "robustness"]
 
 
 def git_revision() -> str:

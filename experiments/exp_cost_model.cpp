@@ -1,0 +1,449 @@
+// The lecture's cost model, Cost(node) = C_trav + P(L)·Cost(L) + P(R)·Cost(R) with 1:80 (pbrt) or
+// 1:1.5 ("a highly optimized version"), measured and fitted (lib/cost):
+//  1. the data set: the sweep of plan quick (or full) on this machine (raylab sweep);
+//  2. the fit: per structure family, the constants of the counters and tree models with their
+//     standard errors, the measured C_trav:C_isect, and the terms model selection keeps
+//     (raylab fit), written as cost_model.json;
+//  3. prediction on scenes no fit has seen: every candidate structure of `auto` and the textbook
+//     trees, measured on held-out scenes, against the counters model, the tree model and plain
+//     SAH at 1:80 and 1:1.5 (each scaled by a fit on the data set): MAPE, R² and Spearman's rank
+//     correlation among the trees of one scene;
+//  4. trees built from the fitted model (cost=) against trees built with 1:80 and 1:1.5, for the
+//     kd-tree and the BVH, timed against each other in alternating passes;
+//  5. `auto`'s choice against the fastest candidate measured, per held-out scene and ray kind.
+// Writes cost_runs.csv (the data set), cost_model.json, cost_heldout.csv, cost_model.csv and
+// cost_model.md.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "cost/auto_accel.h"
+#include "cost/model_file.h"
+#include "cost/model_fit.h"
+#include "cost/sweep.h"
+#include "experiment_common.h"
+#include "scene/scene_spec.h"
+
+using namespace raylab;
+using namespace raylab::experiments;
+
+namespace {
+
+/// Scenes no plan holds, of the plans' families and of new ones.
+std::vector<std::string> heldout_scenes(bool full) {
+  std::vector<std::string> s = {"cgal:cow", "cgal:fandisk", "grass:blades=6000,seed=7", "walls:n=500,angle=60"};
+  if (full) s.insert(s.end(), {"cgal:armadillo", "cgal:dino", "sphereflake:depth=3,as=triangles",
+                               "stadium:object=(cgal:elephant),ratio=500", "soup:n=30000,seed=5"});
+  return s;
+}
+
+const std::vector<std::string> kRayKinds = {"primary", "diffuse", "shadow"};
+
+std::string ray_spec(const std::string& kind, bool full) { return kind + (full ? ":65536" : ":16384"); }
+
+/// The textbook trees: the lecture's two ratios for the kd-tree and the BVH.
+const std::vector<std::pair<std::string, std::string>> kTextbook = {
+    {"kdtree", "kdtree:c_trav=1,c_isect=80"},
+    {"kdtree", "kdtree:c_trav=1,c_isect=1.5"},
+    {"bvh8", "bvh:c_trav=1,c_isect=80"},
+    {"bvh8", "bvh:c_trav=1,c_isect=1.5"},
+};
+
+double geomean(const std::vector<double>& v) {
+  if (v.empty()) return 0.0;
+  double s = 0;
+  for (double x : v) s += std::log(x);
+  return std::exp(s / static_cast<double>(v.size()));
+}
+
+/// Plain SAH as a predictor: ns ≈ a + b·(E_inner + ratio·E_tests), a and b fitted per family.
+struct SahBaseline {
+  double ratio;
+  std::map<std::string, std::vector<double>> coefficients;  // family -> {a, b}
+  double sah(const RunRecord& r) const { return r.e_inner + ratio * r.e_tests; }
+  double predict(const RunRecord& r) const {
+    const auto& c = coefficients.at(r.family);
+    return c[0] + c[1] * sah(r);
+  }
+};
+
+SahBaseline fit_sah_baseline(double ratio, const std::vector<RunRecord>& runs, const std::set<std::string>& families) {
+  SahBaseline b{ratio, {}};
+  for (const std::string& f : families) {
+    std::vector<std::vector<double>> x;
+    std::vector<double> y;
+    for (const RunRecord& r : runs)
+      if (r.family == f) {
+        x.push_back({1.0, b.sah(r)});
+        y.push_back(r.ns_per_ray_min);
+      }
+    b.coefficients[f] = fit_linear_terms(x, y).values;
+  }
+  return b;
+}
+
+/// Best single-threaded ns per ray of each of `accels` on `rays`, their passes in rotation.
+std::vector<double> rotated_best_ns(const std::vector<const Aggregate*>& accels, const std::vector<Ray>& rays, bool any_hit,
+                                    int rounds) {
+  std::vector<double> best(accels.size(), INFINITY);
+  for (int round = 0; round < rounds; ++round)
+    for (std::size_t i = 0; i < accels.size(); ++i)
+      best[i] = std::min(best[i], trace_rays(*accels[i], rays, TraceOptions{1, false, any_hit}).seconds);
+  for (double& b : best) b = b / static_cast<double>(rays.size()) * 1e9;
+  return best;
+}
+
+std::string pct(double fraction) { return fmt::format("{:.1f}%", 100 * fraction); }
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s.empty() ? "none" : s;
+}
+
+class CostModelExperiment {
+ public:
+  explicit CostModelExperiment(const Options& opt)
+      : opt_(opt),
+        model_path_(opt.out + "/cost_model.json"),
+        csv_(opt.out + "/cost_model.csv",
+             {"part", "family", "level", "term", "value", "std_error", "scene", "rays", "accel", "measured_ns",
+              "counters_ns", "tree_ns", "sah80_ns", "sah15_ns"}) {}
+
+  std::string run() {
+    const std::vector<RunRecord> measured = data_set();
+    progress("exp_cost_model: fitting " + std::to_string(measured.size()) + " rows");
+    const auto fit_start = std::chrono::steady_clock::now();
+    set_ = fit_cost_model_set(measured, {}, FitTarget::embree_normalized);
+    set_.runs_source = runs_path_;
+    write_model_file(set_, model_path_);
+    fit_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_start).count();
+    runs_ = with_fit_target(measured, set_.target);
+
+    std::string md = "## The cost model\n\n";
+    md += intro();
+    md += constants_section();
+    md += selection_section();
+    measure_heldout();
+    md += prediction_section();
+    md += builders_section();
+    md += auto_section();
+    md += "![predicted against measured ns per ray on held-out scenes; fitted constants](cost_model.png)\n\n";
+    md += fmt::format(
+        "Measured by `build/experiments/exp_cost_model --mode {}` (run by `./lab report`), which runs `raylab sweep "
+        "--plan {}` into cost_runs.csv and `raylab fit` into cost_model.json (`./lab report` copies it to "
+        "data/cost/default_model.json, the model `auto` and `cost=default` use); held-out rows: cost_heldout.csv; "
+        "tables: cost_model.csv. {}.\n",
+        opt_.mode, opt_.full() ? "full" : "quick", provenance());
+    return md;
+  }
+
+ private:
+  std::vector<RunRecord> data_set() {
+    runs_path_ = opt_.out + "/cost_runs.csv";
+    if (!opt_.runs.empty()) {
+      progress("exp_cost_model: taking the data set from " + opt_.runs);
+      const auto rows = read_runs_csv(opt_.runs);
+      if (std::filesystem::absolute(opt_.runs) != std::filesystem::absolute(runs_path_))
+        std::filesystem::copy_file(opt_.runs, runs_path_, std::filesystem::copy_options::overwrite_existing);
+      sweep_seconds_ = 0;
+      return rows;
+    }
+    const SweepPlan plan = load_plan(opt_.full() ? "full" : "quick");
+    std::filesystem::remove(runs_path_);
+    SweepOptions o;
+    o.out = runs_path_;
+    int done = 0;
+    o.progress = [&](const std::string& line) {
+      if (++done % 50 == 1) progress("exp_cost_model: " + line);
+    };
+    sweep_seconds_ = seconds_of([&] { run_sweep(plan, o); });
+    return read_runs_csv(runs_path_);
+  }
+
+  std::string intro() const {
+    std::set<std::string> scenes;
+    for (const RunRecord& r : runs_) scenes.insert(r.scene);
+    return fmt::format(
+        "The lecture: Cost(node) = C_trav + P(L)·Cost(L) + P(R)·Cost(R), with hit probabilities from surface areas "
+        "and leaf costs from triangle counts, and two quoted ratios C_trav:C_isect, 1:80 (pbrt) and 1:1.5 (\"a "
+        "highly optimized version\"). Here every structure of the lab is measured on {} scenes ({} rows: scenes × "
+        "structures × camera, diffuse and shadow rays, single thread, each time the minimum of at least 5 passes "
+        "alternating with Embree's on the same rays), and two models are fitted per structure family with Ceres "
+        "(Huber loss at 10% on relative residuals, constants ≥ 0, standard errors from the covariance):\n\n"
+        "- **counters**: ns/ray = c0 + c_node·nodes + c_leaf·leaves + c_test·tests [+ corrections], on the "
+        "counters of a traced pass: the machine's constants; c_node:c_test is the lecture's C_trav:C_isect.\n"
+        "- **tree**: the same form on the structure's surface-area expectations alone (Σ SA(n)/SA(root) interior "
+        "visits, Σ N(l)·SA(l)/SA(root) tests, ...), with corrections for rays that start on surfaces, any-hit "
+        "queries, SIMD leaf groups, end-point overlap and memory: what a builder or `auto` can use before a ray "
+        "is shot.\n\n"
+        "Times are normalised by Embree's passes (each run's minimum times E*/E, E its Embree minimum, E* the "
+        "least disturbed Embree minimum on the same scene and rays), which removes most machine noise. Terms are "
+        "chosen by leave-one-scene-out cross-validation: a term that does not lower the held-out error is dropped.\n\n"
+        "Sweep: {:.0f} s for {} cases; fit (both levels, every family, model selection): {:.0f} s.\n\n",
+        scenes.size(), runs_.size(), sweep_seconds_, runs_.size(), fit_seconds_);
+  }
+
+  std::string constants_section() {
+    std::string md =
+        "### Fitted constants\n\nns per event, ± one standard error; *held-out* is the leave-one-scene-out MAPE.\n\n"
+        "| structure | rows | counters model (held-out MAPE, R²) | C_trav:C_isect measured | tree model (held-out "
+        "MAPE, R²) | builder c_trav, c_leaf, c_isect |\n|---|---|---|---|---|---|\n";
+    for (const auto& [family, m] : set_.families) {
+      auto terms = [&](const LevelFit& f) {
+        std::string s;
+        for (std::size_t j = 0; j < f.model.terms.size(); ++j) {
+          s += fmt::format("{}{} {}", s.empty() ? "" : "; ", f.model.terms[j],
+                           format_with_error(f.model.values[j], f.model.std_errors[j]));
+          csv_.row("constants", family, level_name(f.model.level), f.model.terms[j], f.model.values[j],
+                   f.model.std_errors[j], "", "", "", 0.0, 0.0, 0.0, 0.0, 0.0);
+        }
+        return s + fmt::format(" ({}, {:.3f})", pct(f.held_out_mape), f.held_out_r2);
+      };
+      const double node = m.counters.model.value_of("node"), test = m.counters.model.value_of("test");
+      const std::string ratio = node > 0 && test > 0 ? fmt::format("1:{:.2f}", test / node) : "n/a (a constant at 0)";
+      md += fmt::format("| `{}` | {} | {} | {} | {} | {:.3g}, {:.3g}, {:.3g} ({}) |\n", family, m.rows, terms(m.counters),
+                        ratio, terms(m.tree), m.builder.c_trav, m.builder.c_leaf, m.builder.c_isect, m.builder_source);
+    }
+    return md + "\nThe lecture's ratios against these: 1:80 (pbrt) prices a test at 80 node visits, 1:1.5 at 1.5.\n\n";
+  }
+
+  std::string selection_section() const {
+    std::string md =
+        "### Which terms a scene needs\n\nTerms kept by leave-one-scene-out cross-validation over all scenes, and "
+        "the terms the held-out error of each scene family alone keeps. *Dropped* terms did not lower the held-out "
+        "error; *zero* ones have no data (the feature is 0 on every row).\n\n"
+        "| structure | level | kept | dropped | zero | per scene family |\n|---|---|---|---|---|---|\n";
+    for (const auto& [family, m] : set_.families)
+      for (const LevelFit* f : {&m.counters, &m.tree}) {
+        std::string per;
+        for (const auto& [sf, t] : f->by_scene_family) per += fmt::format("{}{}: {}", per.empty() ? "" : "; ", sf, join(t));
+        md += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", family, level_name(f->model.level), join(f->model.terms),
+                          join(f->dropped), join(f->unused), per);
+      }
+    return md + "\n";
+  }
+
+  std::shared_ptr<const Scene> scene(const std::string& spec) {
+    if (scene_spec_ != spec) {
+      scene_ = make_scene(spec);
+      scene_spec_ = spec;
+    }
+    return scene_;
+  }
+
+  /// Every candidate of `auto` and the textbook trees on the held-out scenes, measured as the
+  /// sweep measures; auto's choice per scene and ray kind.
+  void measure_heldout() {
+    std::vector<std::string> families;
+    for (const auto& [f, m] : set_.families) families.push_back(f);
+    std::vector<std::string> specs = auto_candidate_specs(families, model_path_);
+    for (const auto& [family, spec] : kTextbook)
+      if (set_.families.count(family)) specs.push_back(spec);
+    const std::string heldout_path = opt_.out + "/cost_heldout.csv";
+    std::ofstream out(heldout_path);
+    out << runs_csv_header() << '\n';
+    std::int64_t number = 0;
+    for (const std::string& s : heldout_scenes(opt_.full())) {
+      progress("exp_cost_model: held-out scene " + s);
+      const auto sc = scene(s);
+      const auto embree = make_accelerator("embree", sc);
+      std::map<std::string, std::vector<Ray>> rays;
+      for (const std::string& kind : kRayKinds) rays[kind] = make_ray_set(ray_spec(kind, opt_.full()), sc);
+      for (const std::string& spec : specs) {
+        if (structure_family(spec) == "bsp" && sc->primitive_count() > kAutoBspMaxPrimitives) continue;
+        const BuiltStructure built = build_structure(spec, sc, 1);
+        for (const std::string& kind : kRayKinds) {
+          TimingOptions timing;
+          timing.any_hit = is_any_hit_ray_spec(kind);
+          const RunRecord r =
+              measure_case({number++, s, spec, ray_spec(kind, opt_.full())}, *sc, built, *embree, rays[kind], timing);
+          out << to_csv_row(r) << '\n';
+          heldout_.push_back(r);
+        }
+      }
+      for (const std::string& kind : kRayKinds) {
+        const auto a = make_accelerator("auto:model=" + model_path_ + ",rays=" + kind, sc);
+        auto_choice_[{s, kind}] = dynamic_cast<const AutoAccelerator&>(*a).choice().chosen;
+      }
+      builders_for(s, sc, rays);
+    }
+    heldout_ = with_fit_target(heldout_, set_.target);
+  }
+
+  /// cost=model trees against the textbook ratios, alternating passes, per ray kind.
+  void builders_for(const std::string& s, const std::shared_ptr<const Scene>& sc,
+                    const std::map<std::string, std::vector<Ray>>& rays) {
+    for (const auto& [family, base] : std::vector<std::pair<std::string, std::string>>{{"kdtree", "kdtree"}, {"bvh8", "bvh"}}) {
+      if (!set_.families.count(family)) continue;
+      const auto fitted = make_accelerator(base + ":cost=" + model_path_, sc);
+      const auto r80 = make_accelerator(base + ":c_trav=1,c_isect=80", sc);
+      const auto r15 = make_accelerator(base + ":c_trav=1,c_isect=1.5", sc);
+      for (const std::string& kind : kRayKinds) {
+        const auto best = rotated_best_ns({fitted.get(), r80.get(), r15.get()}, rays.at(kind), is_any_hit_ray_spec(kind),
+                                          opt_.full() ? 20 : 10);
+        builder_rows_.push_back({s, kind, base, best[0], best[1], best[2]});
+      }
+    }
+  }
+
+  std::string prediction_section() {
+    std::set<std::string> families;
+    for (const RunRecord& r : runs_) families.insert(r.family);
+    const SahBaseline sah80 = fit_sah_baseline(80, runs_, families), sah15 = fit_sah_baseline(1.5, runs_, families);
+    struct Scores {
+      std::vector<double> measured, counters, tree, s80, s15;
+    };
+    std::map<std::string, Scores> by_family;
+    Scores all;
+    std::map<std::pair<std::string, std::string>, Scores> by_scene_rays;
+    for (const RunRecord& r : heldout_) {
+      if (!set_.families.count(r.family)) continue;
+      const FamilyModel& m = set_.family(r.family);
+      const double c = m.counters.model.predict(r), t = m.tree.model.predict(r), a = sah80.predict(r), b = sah15.predict(r);
+      for (Scores* s : {&by_family[r.family], &all, &by_scene_rays[{r.scene, r.ray_kind}]}) {
+        s->measured.push_back(r.ns_per_ray_min);
+        s->counters.push_back(c);
+        s->tree.push_back(t);
+        s->s80.push_back(a);
+        s->s15.push_back(b);
+      }
+      csv_.row("heldout", r.family, "", "", 0.0, 0.0, r.scene, r.rays, r.accel, r.ns_per_ray_min, c, t, a, b);
+    }
+    std::string md = fmt::format(
+        "### Prediction on held-out scenes\n\n{} rows on scenes no fit has seen ({}), every candidate structure of "
+        "`auto` and the textbook trees, camera, diffuse and shadow rays. *SAH 1:80* and *SAH 1:1.5* are plain SAH "
+        "costs E_inner + r·E_tests scaled by a + b·SAH fitted per family on the data set. Goals: counters model "
+        "MAPE ≤ 5% and R² ≥ 0.98 per family; tree model MAPE ≤ 15%.\n\n"
+        "| structure | rows | counters MAPE | counters R² | tree MAPE | tree R² | SAH 1:80 MAPE | SAH 1:1.5 MAPE |\n"
+        "|---|---|---|---|---|---|---|---|\n",
+        heldout_.size(), join(heldout_scenes(opt_.full())));
+    auto line = [&](const std::string& name, const Scores& s) {
+      return fmt::format("| {} | {} | {} | {:.3f} | {} | {:.3f} | {} | {} |\n", name, s.measured.size(),
+                         pct(mean_absolute_percentage_error(s.counters, s.measured)),
+                         coefficient_of_determination(s.counters, s.measured),
+                         pct(mean_absolute_percentage_error(s.tree, s.measured)),
+                         coefficient_of_determination(s.tree, s.measured),
+                         pct(mean_absolute_percentage_error(s.s80, s.measured)),
+                         pct(mean_absolute_percentage_error(s.s15, s.measured)));
+    };
+    for (const auto& [f, s] : by_family) md += line("`" + f + "`", s);
+    md += line("all", all);
+    // Spearman among the trees of one scene (one ray kind): does the model rank them as measured?
+    std::vector<double> rho_tree, rho_80, rho_15;
+    for (const auto& [key, s] : by_scene_rays) {
+      rho_tree.push_back(spearman_rank_correlation(s.tree, s.measured));
+      rho_80.push_back(spearman_rank_correlation(s.s80, s.measured));
+      rho_15.push_back(spearman_rank_correlation(s.s15, s.measured));
+    }
+    auto mean_min = [](const std::vector<double>& v) {
+      double sum = 0, lo = 1;
+      for (double x : v) {
+        sum += x;
+        lo = std::min(lo, x);
+      }
+      return fmt::format("{:.3f} (lowest {:.3f})", v.empty() ? 0.0 : sum / static_cast<double>(v.size()), lo);
+    };
+    md += fmt::format(
+        "\nSpearman's rank correlation between predicted and measured time among all structures on one scene and "
+        "ray kind (goal for the tree model: ≥ 0.95), mean over the {} scene and ray-kind groups: tree model {}, SAH "
+        "1:80 {}, SAH 1:1.5 {}.\n\nOn the data set itself (leave one scene out), the held-out MAPE of each family is "
+        "in the table of constants above.\n\n",
+        by_scene_rays.size(), mean_min(rho_tree), mean_min(rho_80), mean_min(rho_15));
+    return md;
+  }
+
+  std::string builders_section() {
+    std::string md =
+        "### Trees built from the fitted model\n\n`cost=cost_model.json` against the lecture's ratios "
+        "(`c_trav=1,c_isect=80` and `c_isect=1.5`) on the held-out scenes: ns per ray, best of alternating "
+        "passes of the three trees; *speed-up* is the faster textbook tree's time over the fitted tree's (goal: "
+        "≥ 0.98 on every scene).\n\n| scene | rays | structure | cost=model | 1:80 | 1:1.5 | speed-up |\n"
+        "|---|---|---|---|---|---|---|\n";
+    std::map<std::string, std::vector<double>> speedups;
+    for (const BuilderRow& b : builder_rows_) {
+      const double speedup = std::min(b.ns_80, b.ns_15) / b.ns_cost;
+      speedups[b.structure].push_back(speedup);
+      md += fmt::format("| {} | {} | `{}` | {:.0f} | {:.0f} | {:.0f} | {:.2f} |\n", b.scene, b.kind, b.structure, b.ns_cost,
+                        b.ns_80, b.ns_15, speedup);
+      csv_.row("builders", b.structure, "", "", 0.0, 0.0, b.scene, b.kind, b.structure, b.ns_cost, b.ns_80, b.ns_15, 0.0,
+               0.0);
+    }
+    for (const auto& [structure, v] : speedups)
+      md += fmt::format("\n`{}`: geometric mean speed-up {:.2f}, lowest {:.2f}, {} of {} cases ≥ 0.98.", structure,
+                        geomean(v), *std::min_element(v.begin(), v.end()),
+                        std::count_if(v.begin(), v.end(), [](double x) { return x >= 0.98; }), v.size());
+    return md + "\n\n";
+  }
+
+  std::string auto_section() {
+    std::string md =
+        "### `auto` against the fastest structure\n\nPer held-out scene and ray kind, the structure `auto:rays=KIND` "
+        "chose from the model alone, against the fastest of its candidates measured (goal: within 10% in at least "
+        "90% of cases).\n\n| scene | rays | auto chose | its ns/ray | fastest | ns/ray | ratio |\n"
+        "|---|---|---|---|---|---|---|\n";
+    int within = 0, total = 0;
+    for (const auto& [key, chosen] : auto_choice_) {
+      const auto& [s, kind] = key;
+      double chosen_ns = NAN, best_ns = INFINITY;
+      std::string best;
+      for (const RunRecord& r : heldout_) {
+        if (r.scene != s || r.ray_kind != kind) continue;
+        const bool textbook = std::any_of(kTextbook.begin(), kTextbook.end(), [&](const auto& t) { return t.second == r.accel; });
+        if (textbook) continue;
+        if (r.accel == chosen) chosen_ns = r.ns_per_ray_min;
+        if (r.ns_per_ray_min < best_ns) {
+          best_ns = r.ns_per_ray_min;
+          best = r.accel;
+        }
+      }
+      const double ratio = chosen_ns / best_ns;
+      within += ratio <= 1.10;
+      ++total;
+      md += fmt::format("| {} | {} | `{}` | {:.0f} | `{}` | {:.0f} | {:.2f} |\n", s, kind, chosen, chosen_ns, best, best_ns,
+                        ratio);
+      csv_.row("auto", structure_family(chosen), "", "", 0.0, 0.0, s, kind, chosen, chosen_ns, best_ns, 0.0, 0.0, 0.0);
+    }
+    md += fmt::format("\n`auto` within 10% of the fastest: {} of {} cases ({}).\n\n", within, total,
+                      pct(total ? double(within) / total : 0.0));
+    return md;
+  }
+
+  struct BuilderRow {
+    std::string scene, kind, structure;
+    double ns_cost, ns_80, ns_15;
+  };
+
+  Options opt_;
+  std::string model_path_, runs_path_;
+  CsvWriter csv_;
+  CostModelSet set_;
+  std::vector<RunRecord> runs_, heldout_;
+  std::map<std::pair<std::string, std::string>, std::string> auto_choice_;
+  std::vector<BuilderRow> builder_rows_;
+  std::string scene_spec_;
+  std::shared_ptr<const Scene> scene_;
+  double sweep_seconds_ = 0, fit_seconds_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse_options(argc, argv, "The lecture's SAH cost model, measured, fitted with Ceres and used");
+  try {
+    CostModelExperiment experiment(opt);
+    const std::string md = experiment.run();
+    std::ofstream(opt.out + "/cost_model.md") << md;
+    return 0;
+  } catch (const InputError& e) {
+    std::cerr << "exp_cost_model: error: " << e.what() << "\n";
+    return 2;
+  }
+}
