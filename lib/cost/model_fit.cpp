@@ -42,9 +42,9 @@ LevelFit fit_level(ModelLevel level, const std::vector<RunRecord>& runs, const F
 enum class Role { none, inner, leaf, test };
 
 Role role_of(const std::string& term) {
-  if (term == "inner" || term == "inside_inner" || term == "incoherent_inner" || term == "inner_memory") return Role::inner;
-  if (term == "leaf") return Role::leaf;
-  if (term == "test" || term == "inside_test" || term == "occluded_test" || term == "test_groups") return Role::test;
+  if (term.rfind("inner_", 0) == 0) return Role::inner;  // inner_<class>, inner_memory
+  if (term.rfind("leaf_", 0) == 0) return Role::leaf;
+  if (term.rfind("test_", 0) == 0) return Role::test;  // test_<class>, test_groups
   return Role::none;
 }
 

@@ -41,6 +41,7 @@ const std::vector<Column>& columns() {
       {"l2_bytes", &RunRecord::l2_bytes},
       {"llc_bytes", &RunRecord::llc_bytes},
       {"passes", &RunRecord::passes},
+      {"clock", &RunRecord::clock},
       {"ns_per_ray_min", &RunRecord::ns_per_ray_min},
       {"ns_per_ray_median", &RunRecord::ns_per_ray_median},
       {"embree_ns_per_ray_min", &RunRecord::embree_ns_per_ray_min},
@@ -192,7 +193,12 @@ std::string scene_family_of(const std::string& scene_spec) {
   return spec.name;
 }
 
-bool ray_kind_starts_inside(const std::string& kind) { return kind == "diffuse" || kind == "shadow" || kind == "ao"; }
+const char* ray_class_of(const std::string& kind) {
+  if (kind == "diffuse") return "bounce";
+  if (kind == "shadow" || kind == "ao") return "occlusion";
+  if (kind == "lines") return "lines";
+  return "camera";
+}
 
 bool ray_kind_incoherent(const std::string& kind) { return kind != "primary"; }
 

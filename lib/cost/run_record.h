@@ -5,7 +5,8 @@
 ///
 /// runs.csv is RFC 4180 CSV (csv.h) with a header naming the columns of run_record_columns(), in
 /// that order when the lab writes it; a reader takes them in any order and ignores extra columns.
-/// Times are nanoseconds of wall clock per ray; counters and features are per ray.
+/// Times are nanoseconds per ray of the clock `clock` names (timing.h: the tracing thread's CPU
+/// time for single-threaded passes, else wall clock); counters and features are per ray.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct RunRecord {
 
   // Timing: passes with counters compiled out, Embree's passes alternating with ours.
   std::int64_t passes = 0;
+  std::string clock;  ///< thread_cpu | wall
   double ns_per_ray_min = 0, ns_per_ray_median = 0;
   double embree_ns_per_ray_min = 0;
   double build_s = 0;
@@ -62,8 +64,9 @@ std::vector<RunRecord> read_runs_csv(const std::string& path, bool allow_empty =
 /// (subdivided, decimated, transformed, room, instances) taking their base's family.
 std::string scene_family_of(const std::string& scene_spec);
 
-/// Ray kinds whose rays start inside the scene (on surfaces): diffuse, shadow, ao.
-bool ray_kind_starts_inside(const std::string& ray_kind);
+/// The class of a ray kind for the tree model (cost_model.h): camera (primary, and the rays aimed
+/// from outside: edges, vertices, file), bounce (diffuse), occlusion (shadow, ao) or lines.
+const char* ray_class_of(const std::string& ray_kind);
 /// Ray kinds without coherence between neighbouring rays: everything but primary.
 bool ray_kind_incoherent(const std::string& ray_kind);
 

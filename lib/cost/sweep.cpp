@@ -172,6 +172,7 @@ RunRecord measure_case(const SweepCase& c, const Scene& scene, const BuiltStruct
 
   const AlternatingTiming t = time_alternating(*built.accel, &embree, rays, timing);
   r.passes = t.passes;
+  r.clock = t.thread_cpu ? "thread_cpu" : "wall";
   r.ns_per_ray_min = t.ns_per_ray_min;
   r.ns_per_ray_median = t.ns_per_ray_median;
   r.embree_ns_per_ray_min = t.embree_ns_per_ray_min;

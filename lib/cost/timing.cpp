@@ -19,18 +19,24 @@ double median_of(std::vector<double> v) {
 AlternatingTiming time_alternating(const Primitive& ours, const Primitive* embree, const std::vector<Ray>& rays,
                                    const TimingOptions& options) {
   const TraceOptions trace{options.threads, false, options.any_hit};
+  const bool thread_cpu = resolve_thread_count(options.threads) == 1;
+  auto seconds = [&](const Primitive& p) {
+    const TraceResult r = trace_rays(p, rays, trace);
+    return thread_cpu ? r.thread_cpu_seconds : r.seconds;
+  };
   std::vector<double> mine, theirs;
   double spent = 0;
   while (static_cast<int>(mine.size()) < options.max_passes &&
          (static_cast<int>(mine.size()) < options.min_passes || spent < options.min_seconds)) {
-    if (embree) theirs.push_back(trace_rays(*embree, rays, trace).seconds);
-    const double s = trace_rays(ours, rays, trace).seconds;
+    if (embree) theirs.push_back(seconds(*embree));
+    const double s = seconds(ours);
     mine.push_back(s);
     spent += s;
   }
   const double per_ray = 1e9 / static_cast<double>(rays.size());
   AlternatingTiming t;
   t.passes = static_cast<int>(mine.size());
+  t.thread_cpu = thread_cpu;
   t.ns_per_ray_min = *std::min_element(mine.begin(), mine.end()) * per_ray;
   t.ns_per_ray_median = median_of(mine) * per_ray;
   if (!theirs.empty()) {

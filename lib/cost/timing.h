@@ -3,6 +3,12 @@
 /// --measure` and the experiments: passes over the same rays with counters compiled out, each
 /// pass of ours next to a pass of Embree's, so that both see the same machine state; the minimum
 /// is the figure (the least disturbed pass), the median beside it.
+///
+/// Single-threaded passes are timed in CPU time of the tracing thread (TraceResult::
+/// thread_cpu_seconds): on a quiet machine it equals the wall clock, and on a shared one it
+/// leaves out the time the thread waited for a core, which otherwise dominates the noise (seen
+/// here under a load of 5 on 2 cores: a kd-tree pass varied 690-970 ns per ray in wall clock and
+/// 490-550 in CPU time, with Embree's at 186 in both). Multi-threaded passes use the wall clock.
 #include <vector>
 
 #include "geometry/ray.h"
@@ -20,6 +26,7 @@ struct TimingOptions {
 
 struct AlternatingTiming {
   int passes = 0;
+  bool thread_cpu = false;  ///< timed in CPU time of the tracing thread (threads = 1), else wall clock
   double ns_per_ray_min = 0, ns_per_ray_median = 0;  ///< ours
   double embree_ns_per_ray_min = 0;                  ///< Embree's passes (0 when no Embree was given)
   double embree_ns_per_ray_median = 0;

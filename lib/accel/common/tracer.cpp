@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <time.h>
+
 #include <atomic>
 #include <chrono>
 #include <thread>
@@ -12,6 +14,16 @@
 #include "geometry/float_mode.h"
 
 namespace raylab {
+
+namespace {
+
+double thread_cpu_now() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+}  // namespace
 
 int resolve_thread_count(int threads) {
   if (threads > 0) return threads;
@@ -26,6 +38,7 @@ TraceResult trace_rays(const Primitive& prim, const std::vector<Ray>& rays, cons
   tbb::combinable<RayCounters> counters;
   std::atomic<std::size_t> hit_count{0};
   tbb::task_arena arena(resolve_thread_count(options.threads));
+  const double cpu_start = thread_cpu_now();
   const auto start = std::chrono::steady_clock::now();
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const tbb::blocked_range<std::size_t>& range) {
@@ -47,6 +60,7 @@ TraceResult trace_rays(const Primitive& prim, const std::vector<Ray>& rays, cons
     });
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.thread_cpu_seconds = thread_cpu_now() - cpu_start;
   result.hit_count = hit_count;
   counters.combine_each([&](const RayCounters& c) { result.counters += c; });
   return result;

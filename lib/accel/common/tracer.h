@@ -19,6 +19,9 @@ struct TraceResult {
   std::vector<std::uint8_t> blocked;  ///< occlusion mode: one per ray
   RayCounters counters;               ///< summed over rays (zero unless TraceOptions::counters)
   double seconds = 0.0;               ///< wall-clock time of the trace
+  /// CPU time of the calling thread during the trace: with threads = 1 the trace runs on that
+  /// thread alone, and this excludes the time a shared machine kept it waiting for a core.
+  double thread_cpu_seconds = 0.0;
   std::size_t hit_count = 0;          ///< rays that hit (or are occluded)
 };
 
