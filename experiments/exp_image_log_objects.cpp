@@ -10,7 +10,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "experiment_common.h"
-#include "fit.h"
+#include "cost/fit.h"
 #include "scene/scene_spec.h"
 
 using namespace raylab;
@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
     md += "The lecture: brute force costs |Image| x |Objects|; acceleration about |Image| x log|Objects|. ";
     md += fmt::format("The same {} rays per scene are traced with `brute` (watertight kernel) and `embree` ", ray_spec);
     md += "(medium quality), single-threaded, as the triangle count grows.\n\n";
+    md += "Fits with Ceres (lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error.\n\n";
     md += "| family | model | fit (ns per ray) | R² | power law α (ns ∝ N^α) |\n|---|---|---|---|---|\n";
     for (const auto& fam : families) {
       std::map<std::string, std::vector<double>> ns, tris;
@@ -64,14 +65,18 @@ int main(int argc, char** argv) {
                   static_cast<double>(counted.counters.prim_tests) / rays.size());
         }
       }
-      const LinearFit brute_lin = fit_linear(tris["brute"], ns["brute"], [](double x) { return x; });
-      const LinearFit brute_pow = fit_power(tris["brute"], ns["brute"]);
-      const LinearFit em_log = fit_linear(tris["embree"], ns["embree"], [](double x) { return std::log2(x); });
-      const LinearFit em_pow = fit_power(tris["embree"], ns["embree"]);
-      md += fmt::format("| {} | brute: a + b·N | {:.1f} + {:.4f}·N | {:.4f} | {:.3f} |\n", fam.name, brute_lin.a,
-                        brute_lin.b, brute_lin.r2, brute_pow.b);
-      md += fmt::format("| {} | embree: a + b·log2 N | {:.1f} + {:.2f}·log2 N | {:.4f} | {:.3f} |\n", fam.name, em_log.a,
-                        em_log.b, em_log.r2, em_pow.b);
+      const FitResult brute_lin = fit_basis(tris["brute"], ns["brute"], [](double x) { return x; });
+      const FitResult brute_pow = fit_power_law(tris["brute"], ns["brute"]);
+      const FitResult em_log = fit_basis(tris["embree"], ns["embree"], [](double x) { return std::log2(x); });
+      const FitResult em_pow = fit_power_law(tris["embree"], ns["embree"]);
+      md += fmt::format("| {} | brute: a + b·N | ({}) + ({})·N | {:.4f} | {} |\n", fam.name,
+                        format_with_error(brute_lin.values[0], brute_lin.std_errors[0]),
+                        format_with_error(brute_lin.values[1], brute_lin.std_errors[1]), brute_lin.r2,
+                        format_with_error(brute_pow.values[1], brute_pow.std_errors[1]));
+      md += fmt::format("| {} | embree: a + b·log2 N | ({}) + ({})·log2 N | {:.4f} | {} |\n", fam.name,
+                        format_with_error(em_log.values[0], em_log.std_errors[0]),
+                        format_with_error(em_log.values[1], em_log.std_errors[1]), em_log.r2,
+                        format_with_error(em_pow.values[1], em_pow.std_errors[1]));
     }
     md += "\n![per-ray time against triangle count](image_log_objects.png)\n\n";
     md += "Reading: brute force's exponent α near 1 confirms |Objects|; Embree's small α and a good fit to a + b·log2 N "

@@ -16,7 +16,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "experiment_common.h"
-#include "fit.h"
+#include "cost/fit.h"
 #include "scene/scene_spec.h"
 
 using namespace raylab;
@@ -214,12 +214,14 @@ int main(int argc, char** argv) {
     }
     md += "Build time of the SAH kd-tree (exact clipping) on tessellated spheres of N = 2^12 … 2^" +
           std::to_string(max_log) + " triangles, least-squares fits t = a + b·f(N):\n\n";
+    md += "Fits with Ceres (lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error.\n\n";
     md += "| sweep | fit | a (s) | b (ns) | R² |\n|---|---|---|---|---|\n";
     for (const std::string sw : {"sort", "events"}) {
-      const LinearFit f1 = fit_linear(ns[sw], ts[sw], [](double n) { return n * std::log2(n); });
-      const LinearFit f2 = fit_linear(ns[sw], ts[sw], [](double n) { return n * std::log2(n) * std::log2(n); });
-      md += fmt::format("| {} | N log N | {:.4f} | {:.2f} | {:.4f} |\n", sw, f1.a, f1.b * 1e9, f1.r2);
-      md += fmt::format("| {} | N log² N | {:.4f} | {:.3f} | {:.4f} |\n", sw, f2.a, f2.b * 1e9, f2.r2);
+      const FitResult f1 = fit_basis(ns[sw], ts[sw], [](double n) { return n * std::log2(n); });
+      const FitResult f2 = fit_basis(ns[sw], ts[sw], [](double n) { return n * std::log2(n) * std::log2(n); });
+      for (const auto& [name, f] : {std::pair{"N log N", &f1}, std::pair{"N log² N", &f2}})
+        md += fmt::format("| {} | {} | {} | {} | {:.4f} |\n", sw, name, format_with_error(f->values[0], f->std_errors[0]),
+                          format_with_error(f->values[1] * 1e9, f->std_errors[1] * 1e9), f->r2);
     }
     md += fmt::format("\nLargest N ({:.0f} triangles): sort {:.2f} s, events {:.2f} s, Embree (medium quality, its "
                       "own threads) {:.3f} s; events/Embree = {:.0f}.\n",
