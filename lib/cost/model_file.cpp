@@ -1,13 +1,13 @@
 #include "cost/model_file.h"
 
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 
+#include "cost/output_file.h"
 #include "cost/provenance.h"
 #include "geometry/input_error.h"
 
@@ -192,22 +192,7 @@ void write_model_file(const CostModelSet& set, const std::string& path) {
                     {"loss_scale", set.options.loss_scale},
                     {"nonnegative", set.options.nonnegative}}},
                   {"families", families}};
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path + ": cannot write");
-    out << j.dump(2) << '\n';
-    if (!out.flush()) {
-      std::filesystem::remove(tmp);
-      throw InputError(path + ": write failed");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp);
-    throw InputError(path + ": cannot write (" + ec.message() + ")");
-  }
+  write_file_atomically(path, j.dump(2) + "\n");
 }
 
 CostModelSet read_model_file(const std::string& path_in) {

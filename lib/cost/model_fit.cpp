@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <map>
 #include <set>
 
+#include "cost/output_file.h"
 #include "geometry/input_error.h"
 
 namespace raylab {
@@ -73,13 +73,6 @@ FittedSahCost builder_constants(const FittedCostModel& model, const std::vector<
   return c;
 }
 
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
-}
-
 }  // namespace
 
 const FamilyModel& CostModelSet::family(const std::string& name) const {
@@ -129,7 +122,7 @@ CostModelSet fit_cost_model_set(const std::vector<RunRecord>& measured, const Fi
   const std::vector<RunRecord> runs = with_fit_target(measured, target);
   CostModelSet set;
   set.target = target;
-  set.created = utc_now();
+  set.created = utc_timestamp();
   set.rows = runs.size();
   set.options = options;
   std::set<std::string> families, hosts, cpus, revisions;
