@@ -1,6 +1,7 @@
-// `raylab sweep`, `fit` and `predict` as a user runs them: bad input gives one error line, exit
-// status 2 and no output file; a sweep killed mid-way resumes without losing a row; `predict
-// --measure` traces a case as the sweep does; `trace --accel auto` says what it chose.
+// `raylab sweep`, `merge`, `fit` and `predict` as a user runs them: bad input gives one error line,
+// exit status 2 and no output file; a sweep killed mid-way resumes without losing a row; a merge
+// lacking a shard names it on stdout for the lab's scripts; `predict --measure` traces a case as
+// the sweep does; `trace --accel auto` says what it chose.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -16,6 +17,7 @@
 #include <thread>
 
 #include "cost/run_record.h"
+#include "cost/sweep.h"
 
 namespace {
 
@@ -182,6 +184,55 @@ TEST(CostCli, PredictMeasuresACaseAsTheSweepDoesAndFitPrintsItsConstants) {
   const std::string big = "predict --model " + model.string() + " --scene sphere:n=100000 --accel kdtree";
   expect_one_error_line(run_tool(big), big);
   EXPECT_EQ(run_tool(big + " --allow-extrapolation").status, 0);
+}
+
+TEST(CostCli, MergeNamesTheShardsLackingCasesAndWritesNothing) {
+  const std::string plan = write_file("plan_merge.json", kSmallPlan);
+  const raylab::SweepPlan p = raylab::load_plan(plan);
+  // Shard K of 4 as raylab sweep writes it (timings aside).
+  auto shard_file = [&](std::int64_t k, bool with_rows) {
+    std::string text = raylab::runs_csv_header() + "\n";
+    for (std::int64_t c = k; c < p.case_count() && with_rows; c += 4) {
+      raylab::RunRecord r;
+      const raylab::SweepCase key = p.case_at(c);
+      r.case_number = c;
+      r.scene = key.scene;
+      r.accel = key.accel;
+      r.rays = key.rays;
+      text += raylab::to_csv_row(r) + "\n";
+    }
+    return write_file("merge_shard_" + std::to_string(k) + ".csv", text);
+  };
+  std::vector<std::string> files;
+  for (std::int64_t k = 0; k < 4; ++k) files.push_back(shard_file(k, k != 2));  // shard 2 wrote its header only
+  const fs::path out = scratch_dir() / "merged.csv";
+  fs::remove(out);
+  const std::string args = "merge --plan " + plan + " --shards 4 --out " + out.string() + " " + files[0] + " " + files[1] +
+                           " " + files[2] + " " + files[3];
+  const ToolRun r = run_tool(args);
+  expect_one_error_line(r, args);
+  EXPECT_EQ(r.out, "incomplete_shards=2\n");
+  EXPECT_NE(r.err.find("5 of 20 cases missing (2, 6, 10, 14, 18), in shard 2 of 4"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(out.string() + ".sweep.json"));
+
+  // Bad input: one line, exit 2, nothing written.
+  for (const std::string& bad : {"merge --plan " + plan + " --out " + out.string(),  // no shard files
+                                 "merge --plan /no/such/plan.json --out " + out.string() + " " + files[0],
+                                 "merge --plan " + plan + " --shards -2 --out " + out.string() + " " + files[0],
+                                 "merge --plan " + plan + " --out " + out.string() + " " + plan}) {  // not a runs file
+    expect_one_error_line(run_tool(bad), bad);
+    EXPECT_FALSE(fs::exists(out)) << bad;
+  }
+
+  // The merge of every shard, and the plan check the lab's sweep validates plans with.
+  shard_file(2, true);
+  const ToolRun ok = run_tool(args);
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  EXPECT_EQ(raylab::read_runs_csv(out.string()).size(), 20u);
+  const ToolRun check = run_tool("sweep --plan " + plan + " --check");
+  ASSERT_EQ(check.status, 0) << check.err;
+  EXPECT_NE(check.out.find(": 20 cases = 2 scenes x 5 accels x 2 rays"), std::string::npos) << check.out;
 }
 
 TEST(CostCli, TraceOfAutoPrintsItsChoice) {

@@ -1,6 +1,6 @@
 // The cost-model layer (lib/cost): Ceres fits recover known constants within their reported
 // standard errors, model selection picks the terms that made the data, the data set's CSV and
-// the model file round-trip and reject bad input, shards of a sweep equal the whole sweep, the
+// the model file round-trip and reject bad input, merged shards of a sweep equal the whole sweep, the
 // builders take fitted constants, and `auto` chooses among the lab's structures.
 #include <gtest/gtest.h>
 
@@ -16,6 +16,7 @@
 #include "accel/common/tracer.h"
 #include "cost/auto_accel.h"
 #include "cost/fit.h"
+#include "cost/merge.h"
 #include "cost/model_file.h"
 #include "cost/model_fit.h"
 #include "cost/model_selection.h"
@@ -236,16 +237,22 @@ std::string deterministic_part(RunRecord r) {
   return to_csv_row(r);
 }
 
-TEST(CostSweep, ShardsConcatenateToTheUnshardedDataSet) {
+TEST(CostSweep, ShardsMergeToTheUnshardedDataSet) {
   const SweepPlan plan = small_plan();
   const std::vector<RunRecord> whole = sweep_into(plan, scratch("whole.csv").string(), {0, 1});
   ASSERT_EQ(static_cast<std::int64_t>(whole.size()), plan.case_count());
-  std::vector<RunRecord> merged = sweep_into(plan, scratch("shard0.csv").string(), {0, 2});
-  const std::vector<RunRecord> second = sweep_into(plan, scratch("shard1.csv").string(), {1, 2});
-  for (const RunRecord& r : merged) EXPECT_EQ(r.case_number % 2, 0);
-  merged.insert(merged.end(), second.begin(), second.end());
-  std::sort(merged.begin(), merged.end(), [](const RunRecord& a, const RunRecord& b) { return a.case_number < b.case_number; });
+  const std::vector<RunRecord> first = sweep_into(plan, scratch("shard0.csv").string(), {0, 2});
+  sweep_into(plan, scratch("shard1.csv").string(), {1, 2});
+  for (const RunRecord& r : first) EXPECT_EQ(r.case_number % 2, 0);
+  MergeOptions o;
+  o.shard_files = {scratch("shard1.csv").string(), scratch("shard0.csv").string()};
+  o.out = scratch("merged.csv").string();
+  std::filesystem::remove(o.out);
+  EXPECT_TRUE(merge_shards(plan, o).complete());
+  const std::vector<RunRecord> merged = read_runs_csv(o.out);
   ASSERT_EQ(merged.size(), whole.size());
+  for (const RunRecord& r : first)  // the merge copies rows, timings included
+    EXPECT_EQ(to_csv_row(merged[static_cast<std::size_t>(r.case_number)]), to_csv_row(r));
   for (std::size_t i = 0; i < whole.size(); ++i) {
     EXPECT_EQ(deterministic_part(merged[i]), deterministic_part(whole[i]));
     EXPECT_GE(whole[i].passes, 5);

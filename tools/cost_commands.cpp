@@ -10,6 +10,7 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
+#include "cost/merge.h"
 #include "cost/model_file.h"
 #include "cost/sweep.h"
 #include "geometry/input_error.h"
@@ -53,6 +54,12 @@ int run_sweep_command(const SweepCommand& o) {
   if (o.passes < 5 || o.passes > 1000) throw InputError("--passes " + std::to_string(o.passes) + ": expected 5..1000");
   const ShardSpec shard = parse_shard(o.shard);
   const SweepPlan plan = load_plan(o.plan);
+  if (o.check) {
+    std::cout << fmt::format("plan {} ({}): {} cases = {} scenes x {} accels x {} rays\n", plan.source,
+                             std::filesystem::absolute(plan_path(plan.source)).string(), plan.case_count(),
+                             plan.scenes.size(), plan.accels.size(), plan.rays.size());
+    return 0;
+  }
   SweepOptions options;
   options.out = o.out;
   options.shard = shard;
@@ -62,6 +69,36 @@ int run_sweep_command(const SweepCommand& o) {
   options.progress = progress_line;
   const SweepSummary s = run_sweep(plan, options);
   progress_line(fmt::format("sweep done: {} cases measured, {} already in {}", s.measured, s.skipped, o.out));
+  return 0;
+}
+
+int run_merge_command(const MergeCommand& o) {
+  const SweepPlan plan = load_plan(o.plan);
+  MergeOptions options;
+  options.shard_files = o.shard_files;
+  options.shard_count = o.shards;
+  options.out = o.out;
+  options.note = o.note;
+  MergeResult r;
+  try {
+    r = merge_shards(plan, options);
+  } catch (const IncompleteMerge& e) {
+    if (!e.result.missing_cases.empty() && e.result.duplicates.empty()) {
+      std::string list;
+      for (const auto k : e.result.incomplete_shards) list += (list.empty() ? "" : ",") + std::to_string(k);
+      std::cout << "incomplete_shards=" << list << std::endl;
+    }
+    throw;
+  }
+  for (const ShardFileRows& f : r.files)
+    if (f.torn_tail) progress_line("note: " + f.path + " ends in a half-written row (ignored; its case is in another file)");
+  std::set<std::string> cpus;
+  for (const RunRecord& row : r.rows) cpus.insert(row.cpu_model);
+  if (cpus.size() > 1)
+    progress_line(fmt::format("note: rows from {} CPU models; raylab fit refuses them unless --allow-mixed-hardware",
+                              cpus.size()));
+  progress_line(fmt::format("merged {} rows of plan {} from {} shard files into {} (how it was run: {})", r.rows.size(),
+                            plan.source, r.files.size(), o.out, merge_record_path(o.out)));
   return 0;
 }
 

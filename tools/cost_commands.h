@@ -1,18 +1,31 @@
 #pragma once
-/// The cost-model commands of the `raylab` tool: `sweep` (the data set), `fit` (the model) and
-/// `predict` (a model's prediction, optionally against a measurement). Each returns the exit
+/// The cost-model commands of the `raylab` tool: `sweep` (the data set), `merge` (a sharded
+/// sweep's files into one data set), `fit` (the model) and `predict` (a model's prediction,
+/// optionally against a measurement). Each returns the exit
 /// status; bad input throws InputError (one `raylab: error:` line, exit 2, in main).
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace raylab {
 
 struct SweepCommand {
   std::string plan, out, shard = "0/1";
   bool resume = false;
+  bool check = false;  ///< validate the plan and print its case count; run nothing
   int threads = 1;
   int passes = 5;
 };
 int run_sweep_command(const SweepCommand& o);
+
+struct MergeCommand {
+  std::string plan, out, note;
+  std::vector<std::string> shard_files;
+  std::int64_t shards = 0;  ///< N of the shards' K/N; 0: one file per shard
+};
+/// Exit 0 when merged. When cases are missing it prints `incomplete_shards=K1,K2` on stdout (for
+/// the scripts that resubmit those shards) before throwing the one-line error.
+int run_merge_command(const MergeCommand& o);
 
 struct FitCommand {
   std::string runs, out;

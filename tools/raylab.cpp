@@ -346,11 +346,23 @@ int main(int argc, char** argv) {
   SweepCommand sweep;
   auto* sweep_cmd = app.add_subcommand("sweep", "measure the cost model's data set: every case of a plan, one CSV row each");
   sweep_cmd->add_option("--plan", sweep.plan, "quick | full | a plan file (JSON: scenes, accels, rays)")->required();
-  sweep_cmd->add_option("--out", sweep.out, "the runs CSV (appended row by row)")->required();
+  sweep_cmd->add_option("--out", sweep.out, "the runs CSV (appended row by row); required unless --check");
   sweep_cmd->add_option("--shard", sweep.shard, "K/N: run the cases whose number is K modulo N");
   sweep_cmd->add_flag("--resume", sweep.resume, "continue an existing --out, skipping its cases");
   sweep_cmd->add_option("--threads", sweep.threads, "tracing and build threads (default 1: the single-thread figures)");
   sweep_cmd->add_option("--passes", sweep.passes, "timed passes per case, at least 5 (default 5)");
+  sweep_cmd->add_flag("--check", sweep.check, "validate the plan, print its case count and run nothing");
+
+  MergeCommand merge;
+  auto* merge_cmd = app.add_subcommand(
+      "merge", "merge a sharded sweep's runs CSVs into one data set, sorted by case, when no case is missing or repeated");
+  merge_cmd->add_option("--plan", merge.plan, "the plan the shards ran (quick | full | a plan file)")->required();
+  merge_cmd->add_option("--out", merge.out, "the merged runs CSV (must not exist); OUT.sweep.json records the merge")
+      ->required();
+  merge_cmd->add_option("--shards", merge.shards, "N of the shards' --shard K/N (default: one file per shard)");
+  merge_cmd->add_option("--note", merge.note, "how the shards were run, for the merge record");
+  merge_cmd->add_option("shard_files", merge.shard_files, "the shards' runs CSVs (a missing file: a shard with no row)")
+      ->required();
 
   FitCommand fit;
   auto* fit_cmd = app.add_subcommand("fit", "fit the cost model (Ceres) to a data set and select its terms");
@@ -394,6 +406,7 @@ int main(int argc, char** argv) {
     else if (trace_cmd->parsed()) return run_trace(trace);
     else if (render_cmd->parsed()) return run_render(render);
     else if (sweep_cmd->parsed()) return run_sweep_command(sweep);
+    else if (merge_cmd->parsed()) return run_merge_command(merge);
     else if (fit_cmd->parsed()) return run_fit_command(fit);
     else if (predict_cmd->parsed()) return run_predict_command(predict);
     return 0;

@@ -128,6 +128,16 @@ SweepPlan load_plan(const std::string& name_or_path) {
   return plan;
 }
 
+void check_row_in_plan(const SweepPlan& plan, const RunRecord& r, const std::string& where) {
+  if (r.case_number >= plan.case_count())
+    throw InputError(where + ": case " + std::to_string(r.case_number) + " is not in plan " + plan.source + " (" +
+                     std::to_string(plan.case_count()) + " cases)");
+  const SweepCase c = plan.case_at(r.case_number);
+  if (c.scene != r.scene || c.accel != r.accel || c.rays != r.rays)
+    throw InputError(where + ": case " + std::to_string(r.case_number) + " is (" + r.scene + ", " + r.accel + ", " +
+                     r.rays + ") but plan " + plan.source + " says (" + c.scene + ", " + c.accel + ", " + c.rays + ")");
+}
+
 ShardSpec parse_shard(const std::string& text) {
   const auto slash = text.find('/');
   std::int64_t k = 0, n = 0;
@@ -208,14 +218,7 @@ SweepSummary run_sweep(const SweepPlan& plan, const SweepOptions& options) {
       fs::resize_file(options.out, complete);
     }
     for (const RunRecord& r : rows) {
-      if (r.case_number >= plan.case_count())
-        throw InputError(options.out + ": case " + std::to_string(r.case_number) + " is not in plan " + plan.source +
-                         " (" + std::to_string(plan.case_count()) + " cases)");
-      const SweepCase c = plan.case_at(r.case_number);
-      if (c.scene != r.scene || c.accel != r.accel || c.rays != r.rays)
-        throw InputError(options.out + ": case " + std::to_string(r.case_number) + " is (" + r.scene + ", " + r.accel +
-                         ", " + r.rays + ") but plan " + plan.source + " says (" + c.scene + ", " + c.accel + ", " +
-                         c.rays + ")");
+      check_row_in_plan(plan, r, options.out);
       if (!done.insert(r.case_number).second)
         throw InputError(options.out + ": case " + std::to_string(r.case_number) + " appears twice");
     }

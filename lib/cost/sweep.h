@@ -48,6 +48,10 @@ SweepPlan load_plan(const std::string& name_or_path);
 /// The path `load_plan` reads for `name_or_path`.
 std::string plan_path(const std::string& name_or_path);
 
+/// Throws InputError (prefixed by `where`) unless `row` is a case of `plan` with the plan's key
+/// (scene, accel, rays) for its case number: how a resumed sweep and a merge know a row is theirs.
+void check_row_in_plan(const SweepPlan& plan, const RunRecord& row, const std::string& where);
+
 struct ShardSpec {
   std::int64_t index = 0, count = 1;
   bool contains(std::int64_t case_number) const { return case_number % count == index; }
