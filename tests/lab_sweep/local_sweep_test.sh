@@ -7,11 +7,7 @@
 #
 # Usage: local_sweep_test.sh RAYLAB_TOOL REPO_DIR WORK_DIR
 set -euo pipefail
-[ $# -eq 3 ] || { echo "usage: $0 RAYLAB_TOOL REPO_DIR WORK_DIR" >&2; exit 2; }
-here=$(cd "$(dirname "$0")" && pwd)
-tool=$(realpath -e -- "$1")
-repo=$(realpath -e -- "$2")
-work=$(realpath -m -- "$3")
+source "$(dirname "$0")/common.sh"
 fail() {
   echo "lab-sweep-test: FAILED: $*" >&2
   exit 1
@@ -19,7 +15,6 @@ fail() {
 rm -rf "$work"
 mkdir -p "$work"
 cd "$work"
-lab=(env "RAYLAB_TOOL=$tool" "$repo/lab")
 
 # 2 scenes x 3 structures x 2 ray sets = 12 cases, well under a second each.
 cat >plan.json <<'EOF'
@@ -36,7 +31,7 @@ err=$("${lab[@]}" sweep plan.json --shards 13 --out bad.csv 2>&1) && fail "more 
 
 # All shards, two at a time.
 "${lab[@]}" sweep plan.json --shards 3 --jobs 2 --out all.csv >all.out 2>&1 || fail "$(cat all.out)"
-python3 "$here/same_rows.py" whole.csv all.csv || fail "the merged shards differ from the unsharded run"
+same_rows whole.csv all.csv || fail "the merged shards differ from the unsharded run"
 grep -q '"how": ".* local: shards 0-2 of 3, 2 at a time, on ' all.csv.sweep.json || fail "no record of how it ran"
 
 # Shards 0 and 2 only (as if shard 1 had failed): the merge names shard 1 and writes nothing.
@@ -48,5 +43,5 @@ grep -q 'in shard 1 of 3' partial.out || fail "the merge does not name shard 1: 
 rerun=$(sed -n 's/^  \(.* --only [0-9,]*\)$/\1/p' partial.out)
 [[ "$rerun" == *" --only 1" ]] || fail "no command rerunning shard 1: $(cat partial.out)"
 bash -c "$rerun" >rerun.out 2>&1 || fail "the printed command failed: $(cat rerun.out)"
-python3 "$here/same_rows.py" whole.csv partial.csv || fail "the completed data set differs from the unsharded run"
+same_rows whole.csv partial.csv || fail "the completed data set differs from the unsharded run"
 echo "lab-sweep-test: passed"

@@ -13,11 +13,7 @@
 #
 # Usage: slurm_sweep_test.sh RAYLAB_TOOL REPO_DIR WORK_DIR
 set -euo pipefail
-[ $# -eq 3 ] || { echo "usage: $0 RAYLAB_TOOL REPO_DIR WORK_DIR" >&2; exit 2; }
-here=$(cd "$(dirname "$0")" && pwd)
-tool=$(realpath -e -- "$1")
-repo=$(realpath -e -- "$2")
-work=$(realpath -m -- "$3")
+source "$(dirname "$0")/common.sh"
 start_s=$(date +%s)
 node=$(hostname -s)
 conf=$work/etc/slurm.conf
@@ -191,7 +187,6 @@ cat >plan.json <<'EOF'
  "accels": ["bvh", "kdtree", "grid", "octree"],
  "rays": ["primary:1024", "shadow:512", "diffuse:512", "lines:512"]}
 EOF
-lab=("env" "RAYLAB_TOOL=$tool" "$repo/lab")
 
 # The unsharded local run the merged data sets must equal, meanwhile.
 "$tool" sweep --plan plan.json --out local.csv >"$work/log/local_sweep.out" 2>&1 &
@@ -243,9 +238,6 @@ wait_for_job() {  # JOB SECONDS
 submitted_job() {  # WHICH ("array" or "merge") SUBMIT_OUTPUT
   sed -n "s/^lab: submitted $1 job \([0-9][0-9]*\) .*/\1/p" <<<"$2"
 }
-# Rows of two runs CSVs equal but for the timing columns.
-same_rows() { python3 "$here/same_rows.py" "$@"; }
-
 # ---- an array sweep of 4 shards, merged and fitted
 mkdir run1
 submit=$("${lab[@]}" sweep --slurm plan.json --shards 4 --partition raylab --time 00:10:00 --out run1/runs.csv \
