@@ -96,6 +96,25 @@ TEST(CostMerge, CompleteShardsMergeSortedByCaseWithARecordOfHowTheyRan) {
   EXPECT_EQ(fs::file_size(o.out), size);
 }
 
+TEST(CostMerge, AHostNameThatIsNotUtf8IsReplacedInTheRecord) {
+  const SweepPlan plan = plan12();
+  const std::string path = scratch("latin1.csv").string();
+  {
+    std::ofstream out(path, std::ios::trunc | std::ios::binary);
+    out << runs_csv_header() << '\n';
+    for (std::int64_t c = 0; c < plan.case_count(); ++c) {
+      RunRecord r = row_of(plan, c);
+      r.host = "n\xf6" "de";  // Latin-1
+      out << to_csv_row(r) << '\n';
+    }
+  }
+  const MergeOptions o = options_for({path}, 1, "latin1_merged.csv");
+  merge_shards(plan, o);
+  std::ifstream in(merge_record_path(o.out));
+  EXPECT_EQ(nlohmann::json::parse(in).at("hosts").at(0), "n\xef\xbf\xbd" "de");  // U+FFFD
+  EXPECT_EQ(read_runs_csv(o.out).at(3).host, "n\xf6" "de");  // the data set keeps the bytes
+}
+
 TEST(CostMerge, AMissingShardIsReportedByIndexAndNothingIsWritten) {
   const SweepPlan plan = plan12();
   // Shard 2 never ran (no file); shard 1 was killed after its first case, mid-way through a row.

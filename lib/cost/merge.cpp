@@ -43,7 +43,8 @@ std::string record_json(const SweepPlan& plan, const MergeResult& result, const 
                                     {"cpu_models", cpus},
                                     {"git_revisions", revisions},
                                     {"threads", threads}};
-  return j.dump(2) + "\n";
+  // Strings from the shard files (hosts, CPU models) need not be UTF-8: replaced, not an exception.
+  return j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace
