@@ -1,8 +1,8 @@
 #pragma once
 /// The cost-model commands of the `raylab` tool: `sweep` (the data set), `merge` (a sharded
 /// sweep's files into one data set), `fit` (the model) and `predict` (a model's prediction,
-/// optionally against a measurement). Each returns the exit
-/// status; bad input throws InputError (one `raylab: error:` line, exit 2, in main).
+/// optionally against a measurement). Each returns the exit status; bad input throws InputError
+/// (one `raylab: error:` line, exit 2, in main).
 #include <cstdint>
 #include <string>
 #include <vector>
