@@ -63,11 +63,13 @@ stop_pid() {  # NAME PID
   wait "$2" 2>/dev/null || true
 }
 
-# On exit: cancel the jobs, stop the daemons by pid (last started first), then end any process the
-# daemons left (slurmstepd carries the marker of slurmd's environment, job processes our SLURM_CONF).
+# On exit: stop the local reference sweep if it still runs, cancel the jobs, stop the daemons by pid
+# (last started first), then end any process the daemons left (slurmstepd carries the marker of
+# slurmd's environment, job processes our SLURM_CONF).
 cleanup() {
   local status=$? entry i p
   trap - EXIT
+  [ -z "${local_sweep:-}" ] || stop_pid "local sweep" "$local_sweep"
   if [ ${#daemon_pids[@]} -gt 0 ] && command -v scancel >/dev/null; then
     timeout 10 scancel --user="$(id -un)" >/dev/null 2>&1 || true
     for ((i = 0; i < 50; i++)); do
