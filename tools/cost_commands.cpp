@@ -125,7 +125,7 @@ int run_fit_command(const FitCommand& o) {
     for (const LevelFit* f : {&m.counters, &m.tree})
       if (!f->converged)
         throw InputError("fit: the " + std::string(level_name(f->model.level)) + " model of '" + name +
-                         "' did not converge; no model written");
+                         "' did not converge (" + f->solver_message + "); no model written");
   write_model_file(set, o.out);
 
   if (o.json) {

@@ -112,9 +112,9 @@ void solve_and_describe(ceres::Problem& problem, const std::vector<Block>& block
   solver.max_num_iterations = options.max_iterations;
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
-  solver.function_tolerance = 1e-12;
-  solver.gradient_tolerance = 1e-14;
-  solver.parameter_tolerance = 1e-12;
+  solver.function_tolerance = 1e-10;
+  solver.gradient_tolerance = 1e-12;
+  solver.parameter_tolerance = 1e-10;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   out.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;

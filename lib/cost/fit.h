@@ -30,7 +30,7 @@ struct FitOptions {
   ResidualKind residual = ResidualKind::relative;
   double loss_scale = 0.1;     ///< Huber scale in residual units; <= 0 for plain least squares
   bool nonnegative = true;     ///< linear models: every coefficient >= 0 (Ceres parameter bounds)
-  int max_iterations = 200;
+  int max_iterations = 2000;
 };
 
 /// The result of one fit. Values and standard errors are in the order of the model's terms.

@@ -24,6 +24,7 @@ LevelFit fit_level(ModelLevel level, const std::vector<RunRecord>& runs, const F
   out.bic = fit.bic;
   out.condition_number = fit.condition_number;
   out.converged = fit.converged;
+  out.solver_message = fit.message;
   out.cross_validated = sel.cross_validated && sel.held_out.valid;
   if (out.cross_validated) {
     out.held_out_mape = sel.held_out.mape;

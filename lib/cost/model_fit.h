@@ -24,6 +24,7 @@ struct LevelFit {
   bool cross_validated = false;
   double aic = 0, bic = 0, condition_number = 0;
   bool converged = false;
+  std::string solver_message;  ///< Ceres' termination message when not converged (not stored in model files)
   std::vector<std::string> dropped, unused;
   std::map<std::string, std::vector<std::string>> by_scene_family;
   std::vector<ScoredModel> path;
