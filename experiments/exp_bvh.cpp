@@ -36,7 +36,7 @@ namespace {
 /// Single-thread ns of one watertight ray-triangle test on `scene`'s triangles: 256 of `rays`
 /// against 4096 triangles drawn uniformly at random, repeated for at least 50 ms.
 double ns_per_triangle_test(const Scene& scene, const std::vector<Ray>& rays) {
-  const Scene& s = scene.instanced() ? *scene.base : scene;
+  const Scene& s = scene.instanced() ? *scene.bases.front() : scene;
   if (s.mesh.size() == 0 || rays.empty()) return 0.0;
   std::mt19937 rng(7);
   std::uniform_int_distribution<unsigned> pick(0, static_cast<unsigned>(s.mesh.size() - 1));

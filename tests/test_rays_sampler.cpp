@@ -252,8 +252,8 @@ TEST(RaysGenerators, FeatureRaysNeedTriangles) {
   EXPECT_THROW(generate_rays("vertices:10", spheres, {}), InputError);
   auto base = std::make_shared<Scene>(cube_scene());
   Scene inst;
-  inst.base = base;
-  inst.instances = {AffineTransform::identity(), AffineTransform::translation({3, 0, 0})};
+  inst.bases = {base};
+  inst.instances = {{AffineTransform::identity(), 0}, {AffineTransform::translation({3, 0, 0}), 0}};
   EXPECT_THROW(generate_rays("edges:10", inst, {}), InputError);
   // Lines work on any scene.
   EXPECT_EQ(generate_rays("lines:10", spheres, {}).size(), 10u);
@@ -279,13 +279,13 @@ TEST(RaysGenerators, DiffuseOnSpheresAndInstances) {
   // Instanced cubes: a brute-force tracer over instances.
   auto base = std::make_shared<Scene>(cube_scene());
   Scene inst;
-  inst.base = base;
-  inst.instances = {AffineTransform::identity(),
-                    AffineTransform::translation({3, 0, 0}) * AffineTransform::scaling({1, 2, 0.5})};
+  inst.bases = {base};
+  inst.instances = {{AffineTransform::identity(), 0},
+                    {AffineTransform::translation({3, 0, 0}) * AffineTransform::scaling({1, 2, 0.5}), 0}};
   const FirstHitFunction trace = [&](const Ray& r) {
     Hit best;
     for (unsigned k = 0; k < inst.instances.size(); ++k) {
-      Ray local = inst.instances[k].inverse().apply(r);
+      Ray local = inst.instances[k].transform.inverse().apply(r);
       local.tmax = best.t < r.tmax ? best.t : r.tmax;
       Hit h = brute_force<MollerTrumboreKernel>(*base, local);
       if (h.valid()) {

@@ -113,9 +113,9 @@ TEST(SceneSpecs, InstancesStoreOnlyTransforms) {
   EXPECT_EQ(s->instances.size(), 27u);
   const SceneInfo info = describe(*s);
   EXPECT_EQ(info.instances, 27u);
-  EXPECT_EQ(info.triangles, 27u * s->base->triangle_count());
+  EXPECT_EQ(info.triangles, 27u * s->bases.at(0)->triangle_count());
   EXPECT_TRUE(info.closed);
-  EXPECT_DOUBLE_EQ(info.primitives, 27.0 * static_cast<double>(s->base->triangle_count()));
+  EXPECT_DOUBLE_EQ(info.primitives, 27.0 * static_cast<double>(s->bases.at(0)->triangle_count()));
   EXPECT_THROW(make_scene("instances:of=(instances:of=(sphere:n=100),count=2),count=2"), InputError);
   EXPECT_THROW(make_scene("instances:of=(sphere:n=100),count=1000000001"), InputError);
 }

@@ -129,10 +129,12 @@ int run_info(const InfoOptions& o) {
   const SceneInfo info = describe(*scene);
   nlohmann::ordered_json j;
   j["scene"] = o.scene;
-  j["primitives"] = static_cast<std::uint64_t>(info.primitives);
-  j["triangles"] = info.triangles;
-  j["spheres"] = info.spheres;
+  j["meshes"] = info.meshes;
   j["instances"] = info.instances;
+  j["triangles"] = info.triangles;
+  j["unique_triangles"] = info.unique_triangles;
+  j["primitives"] = static_cast<std::uint64_t>(info.primitives);
+  j["spheres"] = info.spheres;
   j["degenerate_triangles"] = info.degenerate_triangles;
   j["closed"] = info.closed;
   j["bounds_min"] = {info.bounds.lo.x, info.bounds.lo.y, info.bounds.lo.z};
@@ -181,7 +183,7 @@ int run_trace(const TraceCommand& o) {
 
   nlohmann::ordered_json j;
   j["scene"] = o.scene;
-  j["triangles"] = scene->instanced() ? scene->base->mesh.size() * scene->instances.size() : scene->mesh.size();
+  j["triangles"] = describe(*scene).triangles;
   j["primitives"] = static_cast<std::uint64_t>(scene->total_primitive_count());
   j["accel"] = o.accel;
   j["build_s"] = build_s;
@@ -240,7 +242,7 @@ int run_trace(const TraceCommand& o) {
   j["peak_rss_bytes"] = peak_rss_bytes();
   if (!o.hits_out.empty()) {
     if (any_hit) write_blocked_csv(o.hits_out, timed.blocked);
-    else write_hits_csv(o.hits_out, timed.hits);
+    else write_hits_csv(o.hits_out, timed.hits, scene.get());
   }
   if (o.json) {
     std::cout << j.dump() << "\n";
@@ -317,7 +319,8 @@ int main(int argc, char** argv) {
   auto* cgal = app.add_subcommand("cgal-meshes", "list the CGAL demo meshes available as cgal:NAME");
 
   InfoOptions info;
-  auto* info_cmd = app.add_subcommand("info", "print triangles, bounds, degenerate count and closedness of a scene");
+  auto* info_cmd = app.add_subcommand(
+      "info", "print meshes, instances, triangles (over all instances and unique), bounds, degenerate count and closedness of a scene");
   info_cmd->add_option("scene", info.scene, "scene spec")->required();
   info_cmd->add_flag("--json", info.json, "print one JSON object");
 
@@ -328,7 +331,7 @@ int main(int argc, char** argv) {
   trace_cmd->add_option("--rays", trace.rays, "ray spec: primary:N, diffuse:N, shadow:N, ao:N, lines:N, edges:N, vertices:N, file:PATH");
   trace_cmd->add_option("--threads", trace.threads, "tracing threads (0: all; 1: single-core figures)");
   trace_cmd->add_option("--check", trace.check, "compare every ray against a reference: exact | brute");
-  trace_cmd->add_option("--hits-out", trace.hits_out, "write hits as CSV ray,prim,t,u,v");
+  trace_cmd->add_option("--hits-out", trace.hits_out, "write hits as CSV ray,prim,t,u,v (plus instance,base on an instanced scene)");
   trace_cmd->add_option("--rays-out", trace.rays_out, "write the traced rays in the ray file format");
   trace_cmd->add_flag("--json", trace.json, "print one JSON object instead of key: value lines");
   trace_cmd->add_flag("!--no-counters", trace.counters, "skip the second, counted pass");

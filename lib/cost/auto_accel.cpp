@@ -76,9 +76,19 @@ std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecRea
     auto chosen = choose(scene, models, model_path, choice);
     return std::make_unique<AutoAccelerator>(std::move(chosen), std::move(choice));
   }
-  // Instances: choose for the base scene, and place that structure under every instance.
-  std::unique_ptr<Aggregate> chosen = choose(scene->base, models, model_path, choice);
-  auto top = make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene>) { return std::move(chosen); });
+  // Instances: choose for each base (placed under its instances) and for the flat geometry apart;
+  // the choice reported is the one for the part with the most primitives.
+  double largest = -1.0;
+  const AutoChoice blank = choice;
+  auto top = make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> part) {
+    AutoChoice part_choice = blank;
+    auto chosen = choose(part, models, model_path, part_choice);
+    if (part->total_primitive_count() > largest) {
+      largest = part->total_primitive_count();
+      choice = std::move(part_choice);
+    }
+    return chosen;
+  });
   return std::make_unique<AutoAccelerator>(std::move(top), std::move(choice));
 }
 

@@ -7,7 +7,9 @@
 /// (default: the mean over primary, diffuse and shadow rays); the fastest prediction is kept and
 /// the others freed. Embree and brute force are not candidates. The BSP tree is skipped above
 /// kAutoBspMaxPrimitives (its build is quadratic in the worst case). Without `model=` the lab's
-/// committed default model (model_file.h) is used, and the choice says so.
+/// committed default model (model_file.h) is used, and the choice says so. On an instanced
+/// scene the choice is made for each base and for the flat geometry apart (placed as
+/// make_instanced_aggregate places them); the choice reported is the largest part's.
 #include <memory>
 #include <string>
 #include <vector>

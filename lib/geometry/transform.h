@@ -91,4 +91,16 @@ struct AffineTransform {
   }
 };
 
+/// All twelve entries finite.
+inline bool is_finite(const AffineTransform& a) {
+  for (const auto& row : a.m)
+    for (const double x : row)
+      if (!std::isfinite(x)) return false;
+  return true;
+}
+
+/// Finite, with a non-zero determinant and a finite inverse: what placing geometry by `a` (and
+/// taking rays back by its inverse) needs.
+inline bool is_invertible(const AffineTransform& a) { return is_finite(a) && a.determinant() != 0.0 && is_finite(a.inverse()); }
+
 }  // namespace raylab

@@ -6,9 +6,11 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string_view>
 
 #include "geometry/input_error.h"
+#include "scene/scene.h"
 
 namespace raylab {
 namespace {
@@ -160,16 +162,21 @@ std::vector<Ray> read_rays(const std::string& path) {
   return rays;
 }
 
-void write_hits_csv(const std::string& path, const std::vector<Hit>& hits) {
-  bool instanced = false;
+void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const Scene* scene) {
+  const bool with_base = scene && scene->instanced();
+  bool instanced = with_base;
   for (const Hit& h : hits) instanced = instanced || h.instance != kInvalidId;
+  if (with_base)
+    for (const Hit& h : hits)
+      if (h.valid() && h.instance != kInvalidId && h.instance >= scene->instances.size())
+        throw std::logic_error("write_hits_csv: a hit names instance " + std::to_string(h.instance) + " the scene lacks");
   Writer w(path);
-  w.put(instanced ? "ray,prim,t,u,v,instance\n" : "ray,prim,t,u,v\n");
+  w.put(with_base ? "ray,prim,t,u,v,instance,base\n" : instanced ? "ray,prim,t,u,v,instance\n" : "ray,prim,t,u,v\n");
   for (std::size_t i = 0; i < hits.size(); ++i) {
     const Hit& h = hits[i];
     w.put(i);
     if (!h.valid()) {
-      w.put(instanced ? ",-1,inf,0,0,-1\n" : ",-1,inf,0,0\n");
+      w.put(with_base ? ",-1,inf,0,0,-1,-1\n" : instanced ? ",-1,inf,0,0,-1\n" : ",-1,inf,0,0\n");
       continue;
     }
     w.put(",");
@@ -183,6 +190,11 @@ void write_hits_csv(const std::string& path, const std::vector<Hit>& hits) {
       if (h.instance == kInvalidId) w.put("-1");
       else w.put(static_cast<std::size_t>(h.instance));
     }
+    if (with_base) {
+      w.put(",");
+      if (h.instance == kInvalidId) w.put("-1");
+      else w.put(static_cast<std::size_t>(scene->instances[h.instance].base));
+    }
     w.put("\n");
   }
   w.close();
@@ -192,11 +204,12 @@ std::vector<Hit> read_hits_csv(const std::string& path) {
   LineReader reader(path);
   std::string line;
   if (!reader.next(line)) throw InputError(path + ": empty file, expected the header ray,prim,t,u,v");
-  bool instanced;
-  if (line == "ray,prim,t,u,v") instanced = false;
-  else if (line == "ray,prim,t,u,v,instance") instanced = true;
-  else throw reader.fault("expected the header ray,prim,t,u,v[,instance]");
-  const std::size_t columns = instanced ? 6 : 5;
+  std::size_t columns;
+  if (line == "ray,prim,t,u,v") columns = 5;
+  else if (line == "ray,prim,t,u,v,instance") columns = 6;
+  else if (line == "ray,prim,t,u,v,instance,base") columns = 7;
+  else throw reader.fault("expected the header ray,prim,t,u,v[,instance[,base]]");
+  const bool instanced = columns >= 6;
   const auto parse_id = [&](std::string_view s, const char* what) -> unsigned {
     if (s == "-1") return kInvalidId;
     std::uint64_t x;
@@ -235,6 +248,9 @@ std::vector<Hit> read_hits_csv(const std::string& path) {
     h.u = v[1];
     h.v = v[2];
     if (instanced) h.instance = parse_id(fields[5], "instance");
+    // The base follows from the instance and the scene; it is checked for form only.
+    if (columns == 7 && (parse_id(fields[6], "base") == kInvalidId) != (h.instance == kInvalidId))
+      throw reader.fault("base '" + std::string(fields[6]) + "' must be -1 exactly when the instance is");
     hits.push_back(h);
   }
   return hits;

@@ -12,8 +12,12 @@
 /// file round-trips bit for bit, denormals and infinities included.
 ///
 /// Hit file (CSV): the header `ray,prim,t,u,v`, then one row per ray in ray order. A miss is
-/// written `ray,-1,inf,0,0`. When any hit carries an instance id (instanced scenes) a sixth
-/// column `instance` is appended (-1 for misses). Floats are written shortest round-trip.
+/// written `ray,-1,inf,0,0`. For an instanced scene (scene.h) two columns follow: `instance`,
+/// the index into Scene::instances of the instance hit, and `base`, the index into Scene::bases
+/// of the base it places; both are -1 for a miss and for a hit on the flat geometry, and `prim`
+/// is then the primitive id within that base (or within the flat geometry). Without a scene, the
+/// `instance` column alone is written when any hit carries one. Floats are written shortest
+/// round-trip.
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -21,6 +25,8 @@
 #include "geometry/ray.h"
 
 namespace raylab {
+
+struct Scene;
 
 /// Most rays (and hit rows) a file may hold: 2^28, the limit of every ray set.
 inline constexpr std::size_t kMaxRaysPerFile = std::size_t{1} << 28;
@@ -36,10 +42,12 @@ void write_rays(const std::string& path, const std::vector<Ray>& rays);
 /// cannot be read; and an error for more than kMaxRaysPerFile rays.
 std::vector<Ray> read_rays(const std::string& path);
 
-/// Writes one CSV row per hit (see above). Throws InputError when the file cannot be written.
-void write_hits_csv(const std::string& path, const std::vector<Hit>& hits);
+/// Writes one CSV row per hit (see above); `scene`, when given, is the scene the hits are on.
+/// Throws InputError when the file cannot be written.
+void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const Scene* scene = nullptr);
 
-/// Reads a hit file written by write_hits_csv (with or without the instance column). Throws
+/// Reads a hit file written by write_hits_csv (with or without the instance and base columns;
+/// the base column is checked to be -1 exactly where the instance is, and not returned). Throws
 /// InputError "PATH:LINE: <fault>" on a wrong header, a wrong field count, a ray column that is
 /// not the row index, a prim that is neither -1 nor a valid id, a miss whose t is not inf, or a
 /// number that does not parse.

@@ -34,12 +34,12 @@ void local_surface(const Scene& s, const Ray& local_ray, const Hit& hit, Vec3d& 
 
 SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
   Vec3d p, n;
-  if (scene.instanced()) {
+  if (hit.instance != kInvalidId) {
     if (hit.instance >= scene.instances.size())
       throw std::logic_error("surface_at: hit names an instance the scene lacks");
-    const AffineTransform& xf = scene.instances[hit.instance];
+    const AffineTransform& xf = scene.instances[hit.instance].transform;
     const AffineTransform inv = xf.inverse();
-    local_surface(*scene.base, inv.apply(ray), hit, p, n);
+    local_surface(scene.base_of(hit.instance), inv.apply(ray), hit, p, n);
     p = xf.apply_point(p);
     // Normals map by the inverse transpose of the linear part.
     n = Vec3d(inv.m[0][0] * n.x + inv.m[1][0] * n.y + inv.m[2][0] * n.z,

@@ -25,7 +25,7 @@ struct SurfacePoint {
 
 /// The world-space point and geometric normal of `hit` (which must be valid for `ray` in
 /// `scene`). Triangles: p from the barycentrics, n = (p1 − p0) × (p2 − p0); spheres: p = o + t·d
-/// projected onto the sphere, n = p − c. In an instanced scene both are computed in the base
+/// projected onto the sphere, n = p − c. For a hit on an instance both are computed in its base
 /// scene and mapped to the world by Scene::instances[hit.instance]: points by the transform,
 /// normals by its inverse transpose. Throws std::logic_error for a hit naming a primitive or
 /// instance the scene does not have (a tracer bug).

@@ -340,7 +340,7 @@ Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c
   require(base != nullptr, "instances: no base scene");
   require(!base->instanced(), "instances: the base " + base->spec + " is itself instanced (one instance level)");
   require(base->primitive_count() > 0, "instances: the base " + base->spec + " is empty");
-  require(c.count >= 1 && c.count <= (1 << 24), "instances: count must be in [1, 2^24] (96 bytes of transform each)");
+  require(c.count >= 1 && c.count <= (1 << 24), "instances: count must be in [1, 2^24] (104 bytes of instance each)");
   const Bounds3f b = base->bounds();
   const Vec3d centre(b.center());
   const double diag = length(Vec3d(b.diagonal()));
@@ -351,15 +351,16 @@ Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c
   std::normal_distribution<double> normal;
   std::uniform_real_distribution<double> angle(0.0, 15.0 * std::numbers::pi / 180.0);
   Scene s;
-  s.base = std::move(base);
+  s.bases.push_back(std::move(base));
   s.instances.reserve(static_cast<std::size_t>(c.count));
   for (std::int64_t i = 0; i < c.count; ++i) {
     const Vec3d cell(static_cast<double>(i % g), static_cast<double>((i / g) % g), static_cast<double>(i / (g * g)));
     Vec3d axis(normal(rng), normal(rng), normal(rng));
     if (dot(axis, axis) < 1e-12) axis = Vec3d(0, 1, 0);
     const double a = angle(rng);
-    s.instances.push_back(AffineTransform::translation(centre + cell * spacing) * AffineTransform::rotation(axis, a) *
-                          AffineTransform::translation(-centre));
+    s.instances.push_back({AffineTransform::translation(centre + cell * spacing) * AffineTransform::rotation(axis, a) *
+                               AffineTransform::translation(-centre),
+                           0});
   }
   return s;
 }

@@ -101,8 +101,8 @@ Scene make_decimated(const Scene& of, std::int64_t faces);
 
 /// `instances:of=SPEC,count=N,seed=S` — N copies of a base scene on a cubic grid (spacing 1.5
 /// times the base's bounding-box diagonal), each turned by a small deterministic random
-/// rotation (up to 15 degrees about a random axis). Only the transforms are stored (96 bytes
-/// each), so N is capped at 2^24 (1.6 GB); kLectureInstancedSceneSpec below makes the lecture's
+/// rotation (up to 15 degrees about a random axis). Only the instances are stored (104 bytes
+/// each: transform and base index), so N is capped at 2^24 (1.7 GB); kLectureInstancedSceneSpec below makes the lecture's
 /// 3.1 billion triangles from 10,300 of them. The base must be non-empty and not itself instanced.
 struct InstancesConfig {
   std::int64_t count = 1000;

@@ -1,9 +1,15 @@
 #pragma once
-/// A scene: triangles and spheres, or instances of a base scene under affine transforms.
+/// A scene: world-space triangles and spheres (the flat geometry), beside any number of base
+/// scenes placed under affine transforms (instances; pbrt-v3 §4.1.2's TransformedPrimitive).
 ///
-/// Primitive ids: triangles are 0 .. T-1 and spheres T .. T+S-1, where T = mesh.size() and
-/// S = spheres.size(). In an instanced scene a hit names the base scene's primitive id and the
-/// instance index (Hit::instance).
+/// Naming a hit (Hit::prim, Hit::instance):
+/// - instance = kInvalidId: a primitive of the flat geometry. Primitive ids are triangles
+///   0 .. T-1 then spheres T .. T+S-1, where T = mesh.size() and S = spheres.size().
+/// - instance = i < instances.size(): the instance instances[i], which places the base
+///   bases[instances[i].base] by instances[i].transform; prim is that base's own primitive id
+///   (its triangles first, then its spheres).
+/// There is one instance level: a base holds flat geometry only.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,51 +20,61 @@
 
 namespace raylab {
 
+struct Scene;
+
+/// One placement of a base scene: object-to-world transform and the index into Scene::bases.
+struct SceneInstance {
+  AffineTransform transform;
+  std::uint32_t base = 0;
+};
+
 struct Scene {
   std::string spec;  ///< the spec string the scene was made from (for reports)
-  TriangleMesh mesh;
+  TriangleMesh mesh;  ///< flat geometry, in world space
   std::vector<Sphere> spheres;
+  /// How many meshes of the source were merged into `mesh` and `spheres` (`raylab info`'s
+  /// meshes: counts them when the flat geometry is not empty).
+  std::size_t flat_mesh_count = 1;
 
-  /// Instancing: when `base` is set, the scene is one copy of *base per transform (object to
-  /// world) and `mesh`/`spheres` are empty.
-  std::shared_ptr<const Scene> base;
-  std::vector<AffineTransform> instances;
+  /// Base scenes (flat geometry only, non-empty), each placed by one or more instances.
+  std::vector<std::shared_ptr<const Scene>> bases;
+  std::vector<SceneInstance> instances;
 
-  bool instanced() const { return base != nullptr; }
+  // The members below assume a valid instancing (require_valid_instances).
+  bool instanced() const { return !instances.empty(); }
+  /// The base an instance places.
+  const Scene& base_of(std::size_t instance) const { return *bases[instances[instance].base]; }
+  /// Triangles of the flat geometry (not of the bases).
   std::size_t triangle_count() const { return mesh.size(); }
-  /// Primitives of this level (for an instanced scene, of the base scene).
-  std::size_t primitive_count() const {
-    return instanced() ? base->primitive_count() : mesh.size() + spheres.size();
-  }
-  /// Triangles plus spheres over all instances (what a flat copy would hold).
-  double total_primitive_count() const {
-    return instanced() ? static_cast<double>(instances.size()) * base->total_primitive_count()
-                       : static_cast<double>(mesh.size() + spheres.size());
-  }
+  /// Primitives of the flat geometry (not of the bases): the id range of hits without instance.
+  std::size_t primitive_count() const { return mesh.size() + spheres.size(); }
+  /// Triangles plus spheres over the flat geometry and all instances (what a flat copy holds).
+  double total_primitive_count() const;
   bool is_sphere(unsigned prim) const { return prim >= mesh.size(); }
   const Sphere& sphere(unsigned prim) const { return spheres[prim - mesh.size()]; }
   Bounds3f primitive_bounds(unsigned prim) const {
     return is_sphere(prim) ? sphere(prim).bounds() : mesh.triangle_bounds(prim);
   }
-  Bounds3f bounds() const {
-    Bounds3f b;
-    if (instanced()) {
-      const Bounds3f inner = base->bounds();
-      for (const auto& xf : instances) b.extend(xf.apply(inner));
-      return b;
-    }
-    b = mesh.bounds();
-    for (const auto& s : spheres) b.extend(s.bounds());
-    return b;
-  }
+  /// Bounds of the flat geometry and of every instance (the transformed box of its base).
+  Bounds3f bounds() const;
+  /// The flat geometry alone, as a scene without instances (a copy).
+  std::shared_ptr<const Scene> flat_part() const;
 };
+
+/// Throws InputError (naming the scene's spec) unless every instance names an existing base,
+/// every base is non-null, non-empty and holds no instances itself, and every instance transform
+/// is_invertible (geometry/transform.h).
+void require_valid_instances(const Scene& scene);
 
 /// Statistics `raylab info` prints.
 struct SceneInfo {
-  double primitives = 0;
-  std::size_t triangles = 0, spheres = 0, instances = 0;
-  std::size_t degenerate_triangles = 0;  ///< zero-area, decided exactly
-  bool closed = false;                   ///< every edge shared by exactly two triangles, consistently oriented
+  double primitives = 0;                 ///< triangles + spheres over all instances
+  std::size_t meshes = 0;                ///< bases plus the meshes merged into the flat geometry
+  std::size_t triangles = 0;             ///< over all instances (what a flat copy would hold)
+  std::size_t unique_triangles = 0;      ///< stored: flat geometry plus each base once
+  std::size_t spheres = 0, instances = 0;
+  std::size_t degenerate_triangles = 0;  ///< zero-area, decided exactly, over all instances
+  bool closed = false;  ///< every part (flat geometry, each base): every edge shared by exactly two triangles, consistently oriented
   Bounds3f bounds;
 };
 

@@ -142,6 +142,15 @@ thread_local int g_scene_nesting = 0;
 
 std::string abbreviated(const std::string& s) { return s.size() <= 80 ? s : s.substr(0, 80) + "..."; }
 
+/// Every vertex and sphere of the scene's flat geometry is finite.
+void require_finite(const Scene& scene, const std::string& spec) {
+  for (const auto& v : scene.mesh.vertices)
+    if (!is_finite(v)) throw InputError("spec " + quoted(spec) + ": the scene has a non-finite vertex coordinate");
+  for (const auto& sp : scene.spheres)
+    if (!is_finite(sp.center) || !std::isfinite(sp.radius) || !is_finite(sp.bounds().hi) || !is_finite(sp.bounds().lo))
+      throw InputError("spec " + quoted(spec) + ": the scene has a sphere with a non-finite centre or radius");
+}
+
 }  // namespace
 
 std::shared_ptr<const Scene> make_scene(const std::string& spec) {
@@ -167,11 +176,10 @@ std::shared_ptr<const Scene> make_scene(const std::string& spec) {
     throw InputError("spec " + quoted(spec) + ": " + msg);
   }
   scene->spec = spec;
-  for (const auto& v : scene->mesh.vertices)
-    if (!is_finite(v)) throw InputError("spec " + quoted(spec) + ": the scene has a non-finite vertex coordinate");
-  for (const auto& sp : scene->spheres)
-    if (!is_finite(sp.center) || !std::isfinite(sp.radius) || !is_finite(sp.bounds().hi) || !is_finite(sp.bounds().lo))
-      throw InputError("spec " + quoted(spec) + ": the scene has a sphere with a non-finite centre or radius");
+  require_finite(*scene, spec);
+  for (const auto& base : scene->bases)
+    if (base) require_finite(*base, spec);
+  if (scene->instanced()) require_valid_instances(*scene);
   if (scene->total_primitive_count() == 0) throw InputError("spec " + quoted(spec) + ": the scene is empty");
   return scene;
 }

@@ -18,18 +18,21 @@
 namespace raylab {
 namespace {
 
-/// Builds `make(base)` once and places it under every instance transform of `scene` in a BVH
-/// top level (PrimitiveBvh).
+/// Builds `make(base)` once per base and places it under each of its instances' transforms, and
+/// `make(flat part)` on the flat geometry, all in a BVH top level (PrimitiveBvh).
 std::unique_ptr<Aggregate> over_instances(const Scene& scene,
                                           const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make) {
-  std::shared_ptr<const Primitive> inner = make(scene.base);
+  require_valid_instances(scene);
+  std::vector<std::shared_ptr<const Primitive>> inner;
+  inner.reserve(scene.bases.size());
+  for (const auto& base : scene.bases) inner.push_back(make(base));
   std::vector<std::shared_ptr<const Primitive>> prims;
-  prims.reserve(scene.instances.size());
-  for (std::size_t i = 0; i < scene.instances.size(); ++i) {
-    if (scene.instances[i].determinant() == 0.0)
-      throw InputError("scene '" + scene.spec + "': instance " + std::to_string(i) + " has a singular transform");
-    prims.push_back(std::make_shared<TransformedPrimitive>(inner, scene.instances[i], static_cast<unsigned>(i)));
-  }
+  prims.reserve(scene.instances.size() + 1);
+  for (std::size_t i = 0; i < scene.instances.size(); ++i)
+    prims.push_back(std::make_shared<TransformedPrimitive>(inner[scene.instances[i].base], scene.instances[i].transform,
+                                                           static_cast<unsigned>(i)));
+  // Its accelerators write hits with instance = kInvalidId (scene_primitives.h), naming the flat geometry.
+  if (scene.primitive_count() > 0) prims.push_back(make(scene.flat_part()));
   return std::make_unique<PrimitiveBvh>(std::move(prims));
 }
 
@@ -187,6 +190,7 @@ std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared
   SpecReader reader(parse_spec(spec));
   const AccelKind& kind = find_accelerator_kind(reader.spec().name);
   reader.reject_unknown_keys(kind.params);
+  if (scene && scene->instanced()) require_valid_instances(*scene);
   if (!scene || scene->total_primitive_count() == 0) throw InputError("accelerator '" + spec + "': the scene is empty");
   auto accel = kind.build(std::move(scene), reader);
   reader.finish(kind.params);

@@ -45,10 +45,12 @@ struct AccelKind {
   std::vector<std::string> oracle_variants = {};
 };
 
-/// For an instanced scene: builds `make(scene.base)` once and places it under every instance
-/// transform (TransformedPrimitive) in a BVH top level (accel/bvh/primitive_bvh.h: binned SAH
-/// over the instances' world bounds, robust traversal). Hits carry the instance index. Throws
-/// InputError for a singular instance transform.
+/// For an instanced scene (scene.h): builds `make(base)` once per base and places it under each
+/// of its instances' transforms (TransformedPrimitive), plus `make` on the flat geometry (a copy,
+/// Scene::flat_part) when there is any, all in a BVH top level (accel/bvh/primitive_bvh.h: binned
+/// SAH over the world bounds, robust traversal). Hits name the instance (kInvalidId on the flat
+/// geometry) and the primitive within its base. Throws InputError for an invalid instance
+/// (require_valid_instances: a singular or non-finite transform, a missing or nested base).
 std::unique_ptr<Aggregate> make_instanced_aggregate(
     const Scene& scene, const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make);
 

@@ -42,15 +42,21 @@ RTCBuildQuality to_rtc(EmbreeConfig::Quality q) {
   }
 }
 
-/// Geometry ids within one Embree scene.
+/// Geometry ids within one Embree scene: a flat scene's triangles and spheres, then (in the
+/// root of an instanced scene) instance i as kFirstInstanceGeometry + i.
 constexpr unsigned kTriangleGeometry = 0;
 constexpr unsigned kSphereGeometry = 1;
+constexpr unsigned kFirstInstanceGeometry = 2;
 
-/// An RTCScene holding a flat scene's triangles (geomID 0) and spheres (geomID 1).
-RTCScene build_geometry_scene(RTCDevice device, const Scene& scene, const EmbreeConfig& config) {
+RTCScene new_scene(RTCDevice device, const EmbreeConfig& config) {
   RTCScene rtc = rtcNewScene(device);
   rtcSetSceneFlags(rtc, config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   rtcSetSceneBuildQuality(rtc, to_rtc(config.quality));
+  return rtc;
+}
+
+/// Attaches a scene's flat geometry to `rtc`: triangles as geomID 0, spheres as geomID 1.
+void attach_flat_geometry(RTCDevice device, RTCScene rtc, const Scene& scene, const EmbreeConfig& config) {
   if (scene.mesh.size() > 0) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetGeometryBuildQuality(g, to_rtc(config.quality));
@@ -77,9 +83,6 @@ RTCScene build_geometry_scene(RTCDevice device, const Scene& scene, const Embree
     rtcAttachGeometryByID(rtc, g, kSphereGeometry);
     rtcReleaseGeometry(g);
   }
-  rtcCommitScene(rtc);
-  check(device, "rtcCommitScene");
-  return rtc;
 }
 
 class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
@@ -87,32 +90,30 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
   EmbreeAccel(std::shared_ptr<const Scene> scene, const EmbreeConfig& config)
       : scene_(std::move(scene)), config_(config), device_(shared_device()) {
     const long long bytes_before = g_embree_bytes.load();
-    const Scene& geometry = scene_->instanced() ? *scene_->base : *scene_;
-    if (geometry.instanced()) throw std::runtime_error("embree: nested instancing is not supported");
-    triangle_count_ = static_cast<unsigned>(geometry.mesh.size());
-    RTCScene inner = build_geometry_scene(device_, geometry, config);
-    if (!scene_->instanced()) {
-      root_ = inner;
-    } else {
-      inner_ = inner;
-      root_ = rtcNewScene(device_);
-      rtcSetSceneFlags(root_, config.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
-      rtcSetSceneBuildQuality(root_, to_rtc(config.quality));
-      for (std::size_t i = 0; i < scene_->instances.size(); ++i) {
-        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
-        rtcSetGeometryInstancedScene(g, inner_);
-        float m[12];
-        const auto& xf = scene_->instances[i];
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 4; ++c) m[r * 4 + c] = static_cast<float>(xf.m[r][c]);
-        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(root_, g, static_cast<unsigned>(i));
-        rtcReleaseGeometry(g);
-      }
-      rtcCommitScene(root_);
-      check(device_, "rtcCommitScene (instances)");
+    if (scene_->instanced()) require_valid_instances(*scene_);
+    root_ = new_scene(device_, config);
+    attach_flat_geometry(device_, root_, *scene_, config);
+    for (const auto& base : scene_->bases) {
+      RTCScene inner = new_scene(device_, config);
+      inner_.push_back(inner);
+      attach_flat_geometry(device_, inner, *base, config);
+      rtcCommitScene(inner);
+      check(device_, "rtcCommitScene (base)");
     }
+    for (std::size_t i = 0; i < scene_->instances.size(); ++i) {
+      RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(g, inner_[scene_->instances[i].base]);
+      float m[12];
+      const auto& xf = scene_->instances[i].transform;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) m[r * 4 + c] = static_cast<float>(xf.m[r][c]);
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m);
+      rtcCommitGeometry(g);
+      rtcAttachGeometryByID(root_, g, kFirstInstanceGeometry + static_cast<unsigned>(i));
+      rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(root_);
+    check(device_, "rtcCommitScene");
     // Geometry buffers are counted too: they are Embree's copy of the scene.
     bytes_ = static_cast<std::size_t>(std::max(0LL, g_embree_bytes.load() - bytes_before));
     RTCBounds b;
@@ -121,7 +122,7 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
   }
   ~EmbreeAccel() override {
     if (root_) rtcReleaseScene(root_);
-    if (inner_) rtcReleaseScene(inner_);
+    for (RTCScene inner : inner_) rtcReleaseScene(inner);
   }
   EmbreeAccel(const EmbreeAccel&) = delete;
   EmbreeAccel& operator=(const EmbreeAccel&) = delete;
@@ -151,8 +152,9 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
     hit.t = rh.ray.tfar;
     hit.u = rh.hit.u;
     hit.v = rh.hit.v;
-    hit.prim = rh.hit.primID + (rh.hit.geomID == kSphereGeometry ? triangle_count_ : 0u);
-    hit.instance = scene_->instanced() ? rh.hit.instID[0] : kInvalidId;
+    hit.instance = rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID ? kInvalidId : rh.hit.instID[0] - kFirstInstanceGeometry;
+    const Scene& part = hit.instance == kInvalidId ? *scene_ : scene_->base_of(hit.instance);
+    hit.prim = rh.hit.primID + (rh.hit.geomID == kSphereGeometry ? static_cast<unsigned>(part.mesh.size()) : 0u);
     ray.tmax = hit.t;
     return true;
   }
@@ -193,8 +195,7 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
   EmbreeConfig config_;
   RTCDevice device_;
   RTCScene root_ = nullptr;
-  RTCScene inner_ = nullptr;
-  unsigned triangle_count_ = 0;
+  std::vector<RTCScene> inner_;  ///< one per base
   std::size_t bytes_ = 0;
   Bounds3f bounds_;
 };

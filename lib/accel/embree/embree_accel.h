@@ -4,7 +4,8 @@
 /// Used as Embree's manual recommends: FTZ/DAZ set on every tracing thread (raylab's tracer does
 /// this for every accelerator, see geometry/float_mode.h), one RTCDevice per process, triangle
 /// geometry in Embree-owned (padded) buffers, spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT,
-/// instances as RTC_GEOMETRY_TYPE_INSTANCE over one shared committed scene, rtcIntersect1 /
+/// instances as RTC_GEOMETRY_TYPE_INSTANCE over one committed scene per base (the flat geometry
+/// beside them in the root scene), rtcIntersect1 /
 /// rtcOccluded1 with an initialised RTCIntersectContext, and the build (rtcCommitScene) timed
 /// apart from tracing: construction of this object is the build.
 ///

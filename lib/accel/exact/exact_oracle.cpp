@@ -5,6 +5,8 @@
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "geometry/exact_predicates.h"
@@ -110,47 +112,81 @@ class ExactOracle final : public AggregateBase<ExactOracle> {
 
 }  // namespace
 
+namespace {
+
+/// Whether the linear part of `xf` is a rotation times a uniform scale (up to rounding), which
+/// maps a sphere onto a sphere.
+bool is_similarity(const AffineTransform& xf) {
+  const Vec3d c[3] = {xf.apply_vector(Vec3d(1, 0, 0)), xf.apply_vector(Vec3d(0, 1, 0)), xf.apply_vector(Vec3d(0, 0, 1))};
+  const double n = dot(c[0], c[0]);
+  const double tol = 1e-9 * n;
+  return std::abs(dot(c[1], c[1]) - n) <= tol && std::abs(dot(c[2], c[2]) - n) <= tol && std::abs(dot(c[0], c[1])) <= tol &&
+         std::abs(dot(c[0], c[2])) <= tol && std::abs(dot(c[1], c[2])) <= tol;
+}
+
+/// Appends `part`'s geometry under `xf` to `flat` (vertices transformed in double, rounded to float).
+void append_transformed(Scene& flat, std::vector<Sphere>& spheres, const Scene& part, const AffineTransform& xf) {
+  const auto offset = static_cast<std::uint32_t>(flat.mesh.vertices.size());
+  for (const auto& v : part.mesh.vertices) flat.mesh.vertices.push_back(xf.apply_point(v));
+  for (auto t : part.mesh.triangles) flat.mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const double scale = std::cbrt(std::abs(xf.determinant()));
+  for (const auto& s : part.spheres) spheres.push_back({xf.apply_point(s.center), static_cast<float>(s.radius * scale)});
+}
+
+}  // namespace
+
 std::shared_ptr<const Scene> flatten_instances(const Scene& scene) {
   if (!scene.instanced()) throw std::logic_error("flatten_instances: scene is not instanced");
+  require_valid_instances(scene);
   if (scene.total_primitive_count() > kExactOracleMaxPrimitives)
     throw InputError("scene '" + scene.spec + "': the exact oracle flattens instances and accepts at most " +
                      std::to_string(static_cast<long long>(kExactOracleMaxPrimitives)) + " primitives, this has " +
                      std::to_string(static_cast<long long>(scene.total_primitive_count())));
-  const Scene& base = *scene.base;
-  if (base.instanced()) throw InputError("scene '" + scene.spec + "': nested instancing is not supported by the oracle");
+  for (std::size_t i = 0; i < scene.instances.size(); ++i)
+    if (!scene.base_of(i).spheres.empty() && !is_similarity(scene.instances[i].transform))
+      throw InputError("scene '" + scene.spec + "': instance " + std::to_string(i) +
+                       " scales spheres non-uniformly, which the oracle's flat copy cannot hold");
   auto flat = std::make_shared<Scene>();
   flat->spec = scene.spec + " (flattened)";
-  // Primitive id = instance * P + prim, for triangles then spheres of each instance in turn. To
-  // keep ids in that order the flat scene stores the instances' spheres as triangles' siblings
-  // only when the base has no spheres; mixed bases are rejected.
-  if (!base.spheres.empty() && base.mesh.size() > 0)
-    throw InputError("scene '" + scene.spec + "': the oracle cannot flatten instances of mixed triangle/sphere scenes");
-  for (const auto& xf : scene.instances) {
-    const auto offset = static_cast<std::uint32_t>(flat->mesh.vertices.size());
-    for (const auto& v : base.mesh.vertices) flat->mesh.vertices.push_back(xf.apply_point(v));
-    for (auto t : base.mesh.triangles) flat->mesh.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
-    for (const auto& s : base.spheres) {
-      // Uniform scale assumed for spheres: radius scales with the cube root of |det|.
-      const double scale = std::cbrt(std::abs(xf.determinant()));
-      flat->spheres.push_back({xf.apply_point(s.center), static_cast<float>(s.radius * scale)});
-    }
-  }
+  std::vector<Sphere> spheres;
+  append_transformed(*flat, spheres, scene, AffineTransform::identity());
+  for (const auto& inst : scene.instances) append_transformed(*flat, spheres, *scene.bases[inst.base], inst.transform);
+  flat->spheres = std::move(spheres);
   return flat;
 }
 
-/// Wraps the flat oracle so that hits report (instance, prim) like instanced accelerators.
+/// Wraps the oracle on the flat copy so that hits name (instance, prim) like instanced
+/// accelerators: part 0 of the copy is the flat geometry, part k + 1 instance k.
 class InstancedExactOracle final : public AggregateBase<InstancedExactOracle> {
  public:
-  InstancedExactOracle(std::shared_ptr<const Scene> flat, unsigned per_instance)
-      : inner_(std::move(flat)), per_instance_(per_instance) {}
+  explicit InstancedExactOracle(const Scene& scene) : inner_(flatten_instances(scene)) {
+    triangle_start_.push_back(0);
+    sphere_start_.push_back(0);
+    base_triangles_.push_back(static_cast<unsigned>(scene.mesh.size()));
+    auto add_part = [&](const Scene& part) {
+      triangle_start_.push_back(triangle_start_.back() + part.mesh.size());
+      sphere_start_.push_back(sphere_start_.back() + part.spheres.size());
+    };
+    add_part(scene);
+    for (const auto& inst : scene.instances) {
+      add_part(*scene.bases[inst.base]);
+      base_triangles_.push_back(static_cast<unsigned>(scene.bases[inst.base]->mesh.size()));
+    }
+  }
   std::string name() const override { return "exact"; }
   AccelStats stats() const override { return inner_.stats(); }
   Bounds3f bounds() const override { return inner_.bounds(); }
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
     if (!inner_.intersect_impl(ray, hit, counters)) return false;
-    hit.instance = hit.prim / per_instance_;
-    hit.prim %= per_instance_;
+    const std::size_t triangles = triangle_start_.back();
+    const bool sphere = hit.prim >= triangles;
+    const std::vector<std::size_t>& start = sphere ? sphere_start_ : triangle_start_;
+    const std::size_t id = sphere ? hit.prim - triangles : hit.prim;
+    // The last part whose range starts at or before id (parts without primitives are skipped).
+    const auto part = static_cast<std::size_t>(std::upper_bound(start.begin(), start.end(), id) - start.begin()) - 1;
+    hit.instance = part == 0 ? kInvalidId : static_cast<unsigned>(part - 1);
+    hit.prim = static_cast<unsigned>(id - start[part]) + (sphere ? base_triangles_[part] : 0u);
     return true;
   }
   template <class Counters>
@@ -160,14 +196,14 @@ class InstancedExactOracle final : public AggregateBase<InstancedExactOracle> {
 
  private:
   ExactOracle inner_;
-  unsigned per_instance_;
+  /// Part p's triangles are the flat ids triangle_start_[p] .. triangle_start_[p+1]-1; its spheres
+  /// the same in sphere_start_, counted after all triangles.
+  std::vector<std::size_t> triangle_start_, sphere_start_;
+  std::vector<unsigned> base_triangles_;  ///< triangles of each part's own scene: its spheres' first id
 };
 
 std::unique_ptr<Aggregate> make_exact_oracle(std::shared_ptr<const Scene> scene) {
-  if (scene->instanced()) {
-    const auto per_instance = static_cast<unsigned>(scene->base->primitive_count());
-    return std::make_unique<InstancedExactOracle>(flatten_instances(*scene), per_instance);
-  }
+  if (scene->instanced()) return std::make_unique<InstancedExactOracle>(*scene);
   return std::make_unique<ExactOracle>(std::move(scene));
 }
 

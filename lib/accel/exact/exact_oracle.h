@@ -3,8 +3,9 @@
 /// the triangles (CGAL::AABB_tree::all_intersected_primitives, whose box and triangle tests are
 /// exact predicates on the float-exact double coordinates), spheres by their outward-rounded
 /// boxes; then ExactFirstHit (geometry/exact_predicates.h) decides every candidate exactly and
-/// orders the hits exactly. Instanced scenes are flattened first (object vertices transformed
-/// in double and rounded to float), which is the geometry the oracle then answers for.
+/// orders the hits exactly. Instanced scenes are flattened first (flatten_instances: every base
+/// under every instance transform, beside the flat geometry), which is the geometry the oracle
+/// then answers for; its hits name instance and primitive as scene.h describes.
 #include <memory>
 
 #include "scene/primitive.h"
@@ -19,7 +20,10 @@ inline constexpr double kExactOracleMaxPrimitives = 1u << 26;
 /// kExactOracleMaxPrimitives primitives.
 std::unique_ptr<Aggregate> make_exact_oracle(std::shared_ptr<const Scene> scene);
 
-/// The flat copy of an instanced scene the oracle uses (primitive id = instance·P + prim).
+/// The flat copy of an instanced scene the oracle uses: the flat geometry's triangles, then those
+/// of instance 0, 1, ... (vertices transformed in double, rounded to float), then the spheres in
+/// the same order. Throws InputError when the copy would exceed kExactOracleMaxPrimitives, for an
+/// invalid instance (require_valid_instances), and for spheres under a non-uniform scale.
 std::shared_ptr<const Scene> flatten_instances(const Scene& scene);
 
 }  // namespace raylab
