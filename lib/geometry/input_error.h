@@ -8,30 +8,30 @@
 
 namespace raylab {
 
+/// `s` with its control characters (a newline or NUL copied from a bad spec or file) written as
+/// \xNN, so that it prints as one line (found by the scene-spec fuzzer).
+inline std::string one_line(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) {
+      static const char* hex = "0123456789abcdef";
+      out += "\\x";
+      out += hex[u >> 4];
+      out += hex[u & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 class InputError : public std::runtime_error {
  public:
-  /// Control characters of `message` (a newline or NUL copied from a bad spec or file) are
-  /// written as \xNN, so the message is always one line (found by the scene-spec fuzzer).
+  /// The message is made one line by one_line().
   explicit InputError(const std::string& message) : std::runtime_error(one_line(message)) {}
   explicit InputError(const char* message) : InputError(std::string(message)) {}
-
- private:
-  static std::string one_line(const std::string& s) {
-    std::string out;
-    out.reserve(s.size());
-    for (const char c : s) {
-      const auto u = static_cast<unsigned char>(c);
-      if (u < 0x20 || u == 0x7f) {
-        static const char* hex = "0123456789abcdef";
-        out += "\\x";
-        out += hex[u >> 4];
-        out += hex[u & 15];
-      } else {
-        out += c;
-      }
-    }
-    return out;
-  }
 };
 
 }  // namespace raylab

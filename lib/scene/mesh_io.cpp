@@ -16,11 +16,14 @@
 #include <fstream>
 #include <limits>
 #include <mutex>
-#include <sstream>
+#include <istream>
+#include <streambuf>
 #include <string_view>
 #include <vector>
 
 #include "geometry/input_error.h"
+#include "geometry/input_warning.h"
+#include "scene/file_format.h"
 #include "scene/openmesh_conversion.h"
 
 namespace raylab {
@@ -30,6 +33,8 @@ using PolyMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
 using TriMesh = OpenMeshTriMesh;
 
 constexpr std::uint64_t kMaxVertices = std::numeric_limits<std::uint32_t>::max();
+/// Warnings kept per file; further findings of the same kind are counted in one more line.
+constexpr std::size_t kMaxWarningsPerFile = 8;
 
 /// OpenMesh's IO manager is a process-wide singleton and its streams are global.
 std::mutex& openmesh_mutex() {
@@ -46,21 +51,25 @@ void silence_openmesh() {
   });
 }
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
+/// A read-only stream over text already in memory (OpenMesh's readers take std::istream).
+class ViewStreambuf : public std::streambuf {
+ public:
+  explicit ViewStreambuf(std::string_view text) {
+    char* p = const_cast<char*>(text.data());  // never written: no put area, no putback
+    setg(p, p, p + text.size());
+  }
 
-enum class Format { Off, Obj, Ply, Stl, Unknown };
-
-Format format_of(const std::string& path) {
-  const std::string ext = lower(std::filesystem::path(path).extension().string());
-  if (ext == ".off") return Format::Off;
-  if (ext == ".obj") return Format::Obj;
-  if (ext == ".ply") return Format::Ply;
-  if (ext == ".stl") return Format::Stl;
-  return Format::Unknown;
-}
+ protected:
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    if (!(which & std::ios_base::in)) return pos_type(off_type(-1));
+    const off_type from = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback() : egptr() - eback();
+    const off_type to = from + off;
+    if (to < 0 || to > egptr() - eback()) return pos_type(off_type(-1));
+    setg(eback(), eback() + to, egptr());
+    return pos_type(to);
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override { return seekoff(off_type(pos), std::ios_base::beg, which); }
+};
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) { throw InputError(path + ": " + what); }
 [[noreturn]] void fail_at(const std::string& path, std::size_t line, const std::string& what) {
@@ -164,6 +173,7 @@ class TokenReader {
 
 struct ScanResult {
   std::size_t faces = 0, triangles = 0, polygons = 0;
+  bool binary = false;  ///< a binary STL (OpenMesh's stream reader must be told)
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -366,19 +376,39 @@ class BinaryReader {
   bool big_;
 };
 
-ScanResult scan_ply(const std::string& path, std::string_view text) {
+/// Also writes `canonical` when the header has lines that are no PLY keyword (an exporter's
+/// "Created by ..." line): the file without them, which is what OpenMesh then reads; each such
+/// line adds a warning.
+ScanResult scan_ply(const std::string& path, std::string_view text, std::string& canonical, std::vector<std::string>& warnings) {
   LineReader lines(text, false);
   std::vector<std::string_view> tok;
+  std::string header;  // the header's lines that are kept, tokens joined by single spaces
+  auto keep = [&] {
+    for (std::size_t k = 0; k < tok.size(); ++k) {
+      header.append(tok[k]);
+      header += k + 1 < tok.size() ? ' ' : '\n';
+    }
+  };
   if (!lines.next(tok) || tok[0] != "ply") fail(path, "not a PLY file (no 'ply' magic on the first line)");
+  keep();
   if (!lines.next(tok) || tok[0] != "format" || tok.size() != 3 || tok[2] != "1.0") fail_at(path, lines.line(), "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+  keep();
   const std::string_view fmt = tok[1];
   if (fmt != "ascii" && fmt != "binary_little_endian" && fmt != "binary_big_endian")
     fail_at(path, lines.line(), "unknown PLY format " + shown(fmt));
   const bool ascii = fmt == "ascii";
   std::vector<PlyElement> elements;
   bool ended = false;
+  std::size_t skipped = 0;
   while (lines.next(tok)) {
     const std::string_view key = tok[0];
+    if (key != "comment" && key != "obj_info" && key != "end_header" && key != "element" && key != "property") {
+      if (++skipped <= kMaxWarningsPerFile)
+        warnings.push_back(path + ":" + std::to_string(lines.line()) + ": skipped a PLY header line that is no PLY keyword: " +
+                           shown(key) + (tok.size() > 1 ? " ..." : ""));
+      continue;
+    }
+    keep();
     if (key == "comment" || key == "obj_info") continue;
     if (key == "end_header") { ended = true; break; }
     if (key == "element") {
@@ -400,12 +430,17 @@ ScanResult scan_ply(const std::string& path, std::string_view text) {
         fail_at(path, lines.line(), "expected 'property TYPE NAME' or 'property list COUNT_TYPE ITEM_TYPE NAME'");
       }
       elements.back().props.push_back(p);
-    } else {
-      fail_at(path, lines.line(), "unexpected header line starting with " + shown(key));
     }
   }
   if (!ended) fail(path, "the header has no 'end_header'");
+  if (skipped > kMaxWarningsPerFile)
+    warnings.push_back(path + ": skipped " + std::to_string(skipped - kMaxWarningsPerFile) + " more such header lines");
   const std::size_t body = lines.offset();
+  if (skipped > 0) {
+    canonical.reserve(header.size() + text.size() - body);
+    canonical = header;
+    canonical.append(text.substr(body));
+  }
   const std::uint64_t rest = text.size() - body;
   const PlyElement* vertex = nullptr;
   const PlyElement* face = nullptr;
@@ -517,9 +552,11 @@ ScanResult scan_stl(const std::string& path, std::string_view text) {
           if (!std::isfinite(le_f32(tri + 4 * k))) fail(path, "triangle " + std::to_string(i) + " has a non-finite coordinate");
       }
       r.faces = r.triangles = n;
+      r.binary = true;
       return r;
     }
   }
+  reject_utf16_text(path, text);
   std::size_t lead = 0;
   while (lead < text.size() && is_space(text[lead])) ++lead;
   if (text.substr(lead, 5) != "solid") {
@@ -539,19 +576,20 @@ ScanResult scan_stl(const std::string& path, std::string_view text) {
     if (!to_double(t, d)) fail_at(path, tokens.line(), where + ": bad number " + shown(t));
     if (coordinate && !finite_float(d)) fail_at(path, tokens.line(), where + " has a non-finite coordinate");
   };
+  // Exporters write several `solid NAME ... endsolid NAME` blocks, some of them empty, into one
+  // file: all of them make one mesh. A name is the rest of its solid/endsolid line; text
+  // between solids is ignored, as OpenMesh's reader ignores it.
   bool in_solid = false;
+  std::size_t name_line = 0;
   while (tokens.next(t)) {
-    if (t == "solid") {
-      in_solid = true;
-      continue;
-    }
-    if (t == "endsolid") {
-      in_solid = false;
+    if (tokens.line() == name_line) continue;
+    if (t == "solid" || t == "endsolid") {
+      in_solid = t == "solid";
+      name_line = tokens.line();
       continue;
     }
     if (t != "facet") {
-      if (in_solid && r.faces == 0) continue;  // the solid's name
-      if (!in_solid) continue;                 // the name after endsolid
+      if (!in_solid) continue;
       fail_at(path, tokens.line(), "expected 'facet' or 'endsolid', found " + shown(t));
     }
     const std::string where = "triangle " + std::to_string(r.faces);
@@ -598,51 +636,53 @@ TriangleMesh from_openmesh(const std::string& path, const PolyMesh& m, MeshLoadR
 
 }  // namespace
 
-bool has_mesh_extension(const std::string& path) { return format_of(path) != Format::Unknown; }
+bool has_mesh_extension(const std::string& path) {
+  const auto f = format_by_extension(path);
+  return f && file_format_doc(*f).library == FileLibrary::openmesh;
+}
 
 TriangleMesh load_mesh(const std::string& path, MeshLoadReport* report) {
-  const Format format = format_of(path);
-  if (format == Format::Unknown) fail(path, "unknown mesh format (expected .off, .obj, .ply or .stl)");
+  const FileFormat format = detect_file_format(path);
+  const FileFormatDoc& doc = file_format_doc(format);
+  if (doc.library != FileLibrary::openmesh)
+    fail(path, doc.name + " is a scene format read by Assimp (load it as a scene, file:PATH), not one mesh");
+  MeshLoadReport local;
   ScanResult scan;
-  std::string canonical_off;
-  {
-    const std::string text = read_whole_file(path);
-    if (text.empty()) fail(path, "empty file");
-    switch (format) {
-      case Format::Off: scan = scan_off(path, text, canonical_off); break;
-      case Format::Obj: scan = scan_obj(path, text); break;
-      case Format::Ply: scan = scan_ply(path, text); break;
-      case Format::Stl: scan = scan_stl(path, text); break;
-      case Format::Unknown: break;
-    }
+  std::string text = read_whole_file(path);
+  if (text.empty()) fail(path, "empty file");
+  std::string canonical;  // what OpenMesh reads instead of `text`, when not empty
+  switch (format) {
+    case FileFormat::off: reject_utf16_text(path, text); scan = scan_off(path, text, canonical); break;
+    case FileFormat::obj: reject_utf16_text(path, text); scan = scan_obj(path, text); break;
+    case FileFormat::ply: reject_utf16_text(path, text); scan = scan_ply(path, text, canonical, local.warnings); break;
+    case FileFormat::stl: scan = scan_stl(path, text); break;
+    default: break;
   }
   if (scan.triangles == 0) fail(path, "no triangles");
+  if (!canonical.empty()) std::string().swap(text);
 
   silence_openmesh();
   PolyMesh m;
   {
     std::lock_guard lock(openmesh_mutex());
     OpenMesh::IO::Options opt;
-    bool ok;
-    if (format == Format::Off) {
-      std::istringstream in(std::move(canonical_off));
-      ok = OpenMesh::IO::read_mesh(m, in, ".off", opt);
-    } else {
-      ok = OpenMesh::IO::read_mesh(m, path, opt);
-    }
-    if (!ok) fail(path, "OpenMesh could not read the file");
+    if (scan.binary) opt += OpenMesh::IO::Options::Binary;
+    ViewStreambuf buffer(canonical.empty() ? std::string_view(text) : std::string_view(canonical));
+    std::istream in(&buffer);
+    // OpenMesh picks its reader by this name's extension; the file itself may have none.
+    if (!OpenMesh::IO::read_mesh(m, in, doc.extensions.front(), opt)) fail(path, "OpenMesh could not read the file");
   }
-  MeshLoadReport local;
   local.faces_read = scan.faces;
   TriangleMesh mesh = from_openmesh(path, m, local);
   local.faces_skipped = scan.faces > m.n_faces() ? scan.faces - m.n_faces() : 0;
   if (mesh.size() == 0) fail(path, "no triangles");
-  if (report) *report = local;
+  for (const auto& w : local.warnings) warn_input(w);
+  if (report) *report = std::move(local);
   return mesh;
 }
 
 void save_mesh(const TriangleMesh& mesh, const std::string& path, bool binary) {
-  if (format_of(path) == Format::Unknown) fail(path, "unknown mesh format (expected .off, .obj, .ply or .stl)");
+  if (!has_mesh_extension(path)) fail(path, "unknown mesh format (expected .off, .obj, .ply or .stl)");
   silence_openmesh();
   TriMesh m = to_openmesh(mesh);
   OpenMesh::IO::Options opt;

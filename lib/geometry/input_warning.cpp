@@ -1,0 +1,19 @@
+#include "geometry/input_warning.h"
+
+#include <cstdio>
+#include <mutex>
+
+#include "geometry/input_error.h"
+
+namespace raylab {
+
+void warn_input(const std::string& message) {
+  static std::mutex m;
+  std::string line = "raylab: warning: ";
+  line += one_line(message);
+  line += '\n';
+  std::lock_guard lock(m);
+  std::fputs(line.c_str(), stderr);
+}
+
+}  // namespace raylab
