@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "scene_test_files.h"
 #include "geometry/input_error.h"
 #include "rays/ray_file.h"
 #include "scene/mesh_io.h"
@@ -155,6 +156,20 @@ TEST(BadInputTool, EveryBadMeshThroughTheTool) {
       ++n;
     }
   EXPECT_GE(n, 90u);
+}
+
+/// Bad scene files of the formats Assimp reads (written by the tests: scene_test_files.h) through
+/// the tool, under the same address-space cap.
+TEST(BadInputTool, EveryBadSceneFileThroughTheTool) {
+  const long limit = kAddressSanitizer ? 0 : 1L << 20;  // KiB: 1 GiB
+  const fs::path dir = fs::temp_directory_path() / ("raylab_bad_scenes_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  for (const auto& f : test::write_bad_scene_files(dir.string())) {
+    const ToolRun r = run_tool("info " + shell_quote(f.path), limit);
+    expect_one_error_line(r, f.path, fs::path(f.path).filename().string());
+    EXPECT_NE(r.err.find(f.fault), std::string::npos) << r.err;
+  }
+  fs::remove_all(dir);
 }
 
 TEST(BadInputTool, EveryBadRayFileThroughTheTool) {

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "scene_test_files.h"
+
 namespace {
 
 struct ToolRun {
@@ -123,6 +125,57 @@ TEST(ToolCli, RayFilesRoundTripThroughTrace) {
   std::getline(in, row);
   EXPECT_EQ(header, "ray,prim,t,u,v");
   EXPECT_EQ(row.substr(0, 8), "0,0,5,0.");
+}
+
+// A glTF scene (issue 20): `info` counts meshes, instances, total and unique triangles;
+// `scenes` says which library reads which format; hit files name instance and base.
+TEST(ToolCli, GltfSceneInfoFormatsAndHitColumns) {
+  raylab::test::GltfDocument doc = raylab::test::shared_cube_document();
+  doc.meshes.push_back(raylab::test::unit_cube());
+  doc.nodes.push_back(raylab::test::trs_node(1, {0, 3, 0}));
+  doc.roots.push_back(2);
+  const std::string path = write_file("cubes.gltf", "");
+  raylab::test::write_gltf(path, doc);
+  const ToolRun info = run_tool("info --json " + path);
+  ASSERT_EQ(info.status, 0) << info.err;
+  const auto j = nlohmann::json::parse(info.out);
+  EXPECT_EQ(j["meshes"], 2);
+  EXPECT_EQ(j["instances"], 2);
+  EXPECT_EQ(j["triangles"], 36);
+  EXPECT_EQ(j["unique_triangles"], 24);
+  EXPECT_EQ(j["closed"], true);
+
+  const ToolRun scenes = run_tool("scenes");
+  for (const char* line : {".off   OFF", ".stl   STL, ASCII or binary, read by OpenMesh", ".gltf  glTF 2.0",
+                           ".glb   glTF 2.0, binary, read by Assimp", ".fbx", ".dae   COLLADA, read by Assimp", ".3ds"})
+    EXPECT_NE(scenes.out.find(line), std::string::npos) << line << "\n" << scenes.out;
+
+  const std::string hits = write_file("cubes_hits.csv", "");
+  const ToolRun trace = run_tool("trace --scene " + path + " --accel kdtree --rays lines:3000 --no-counters --hits-out " + hits);
+  ASSERT_EQ(trace.status, 0) << trace.err;
+  std::ifstream in(hits);
+  std::string row;
+  std::getline(in, row);
+  EXPECT_EQ(row, "ray,prim,t,u,v,instance,base");
+  std::size_t on_instances = 0, on_flat = 0;
+  while (std::getline(in, row)) {
+    std::vector<std::string> f;
+    std::stringstream fields(row);
+    for (std::string x; std::getline(fields, x, ',');) f.push_back(x);
+    ASSERT_EQ(f.size(), 7u) << row;
+    if (f[1] == "-1") continue;
+    EXPECT_LT(std::stoi(f[1]), 12) << row;
+    if (f[5] == "-1") {
+      EXPECT_EQ(f[6], "-1") << row;
+      ++on_flat;
+    } else {
+      EXPECT_LT(std::stoi(f[5]), 2) << row;
+      EXPECT_EQ(f[6], "0") << row;
+      ++on_instances;
+    }
+  }
+  EXPECT_GT(on_instances, 10u);
+  EXPECT_GT(on_flat, 5u);
 }
 
 }  // namespace

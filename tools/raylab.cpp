@@ -33,6 +33,7 @@
 #include "rays/ray_file.h"
 #include "rays/ray_generators.h"
 #include "scene/cgal_meshes.h"
+#include "scene/file_format.h"
 #include "scene/scene_spec.h"
 #include "tools/cost_commands.h"
 #include "tools/heatmap_image.h"
@@ -108,6 +109,13 @@ void print_scenes() {
     std::cout << k.name << "\n    " << k.summary << "\n";
     for (const auto& p : k.params)
       std::cout << "    " << p.key << "=...  " << p.description << " (default " << p.default_value << ")\n";
+    if (k.name != "file") continue;
+    for (const auto& f : file_formats()) {
+      std::string extensions;
+      for (const auto& e : f.extensions) extensions += (extensions.empty() ? "" : " ") + e;
+      std::cout << "    " << fmt::format("{:<6}", extensions) << " " << f.name << ", read by " << library_name(f.library)
+                << (f.library == FileLibrary::openmesh ? " (one mesh)" : " (node tree: shared meshes become instances)") << "\n";
+    }
   }
 }
 

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <limits>
 
 #include "geometry/input_error.h"
 #include "scene/cgal_meshes.h"
+#include "scene/file_format.h"
 #include "scene/mesh_io.h"
 #include "scene/procedural.h"
+#include "scene/scene_import.h"
 
 namespace raylab {
 namespace {
@@ -49,17 +52,30 @@ std::shared_ptr<Scene> mesh_scene(const std::string& path) {
   return s;
 }
 
+/// A scene file: one mesh through OpenMesh, or a scene with a node tree through Assimp.
+std::shared_ptr<Scene> file_scene(const std::string& path) {
+  if (file_format_doc(detect_file_format(path)).library == FileLibrary::openmesh) return mesh_scene(path);
+  return std::make_shared<Scene>(import_scene(path));
+}
+
+bool is_regular_file(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(path, ec);
+}
+
 std::shared_ptr<Scene> build(const std::string& text) {
   const std::string head = text.substr(0, text.find(':'));
-  if (has_mesh_extension(text) && !is_kind(head)) return mesh_scene(text);
+  // A bare path: one with a scene file extension, or the name of an existing file (which may
+  // have no extension); a scene kind's name always means the kind.
+  if (!is_kind(head) && (format_by_extension(text) || is_regular_file(text))) return file_scene(text);
 
   const SpecString spec = parse_spec(text);
   const std::string& name = spec.name;
   if (name == "cgal") return mesh_scene(cgal_mesh_path(single_argument(spec, "NAME")));
-  if (name == "file") return mesh_scene(single_argument(spec, "PATH"));
+  if (name == "file") return file_scene(single_argument(spec, "PATH"));
   if (!is_kind(name))
     throw InputError("spec " + quoted(text) + ": unknown scene kind " + quoted(name) + " (valid: " + kind_list() +
-                     ", or a path ending in .off/.obj/.ply/.stl)");
+                     ", or a scene file: a path ending in " + known_extensions() + ", or an existing file)");
 
   SpecReader r(spec);
   const auto& params = kind(name).params;
@@ -187,7 +203,7 @@ std::shared_ptr<const Scene> make_scene(const std::string& spec) {
 const std::vector<SceneKindDoc>& scene_kinds() {
   static const std::vector<SceneKindDoc> kinds = {
       {"cgal", "a CGAL demo mesh by name: cgal:bunny00 (see cgal_mesh_names())", {}},
-      {"file", "a mesh file (.off .obj .ply .stl): file:PATH, or just PATH", {}},
+      {"file", "a scene file: file:PATH, or just PATH (formats and readers below; no extension: told by content)", {}},
       {"sphere", "a UV sphere with pole fans (closed)",
        {{"n", "5000", "about this many triangles, in [8, 2^27]"}, {"radius", "1", "radius"}}},
       {"sphereflake", "Haines' SPD sphereflake: 9 children of radius 1/3 per sphere, recursively",

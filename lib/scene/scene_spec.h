@@ -2,8 +2,10 @@
 /// Scenes from spec strings (`name:key=value,...`, see geometry/spec_string.h):
 ///
 ///   cgal:NAME            a CGAL demo mesh (cgal_meshes.h), e.g. `cgal:bunny00`
-///   file:PATH            a mesh file (mesh_io.h); `file:(PATH)` when PATH holds ',' or ':'
-///   PATH                 a bare path ending in .off/.obj/.ply/.stl
+///   file:PATH            a scene file (file_format.h): OFF/OBJ/PLY/STL as one mesh (mesh_io.h),
+///                        glTF 2.0/FBX/COLLADA/3DS with their node tree (scene_import.h);
+///                        `file:(PATH)` when PATH holds ',' or ':'
+///   PATH                 a bare path with one of those extensions, or naming an existing file
 ///   sphere, sphereflake, stadium, grass, walls, soup, subdivided, decimated, instances
 ///                        the procedural scenes of procedural.h; nested scenes are specs too:
 ///                        `stadium:object=(sphereflake:depth=2),ratio=1000`
