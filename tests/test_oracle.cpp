@@ -6,19 +6,25 @@
 // An accelerator registered in the factory later is run here without any change to this file.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
 #include <map>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "gltf_writer.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
 namespace {
 
 /// Scenes: random soups, closed meshes, spheres, the lecture's procedural cases, instances, a
-/// real CGAL mesh, and `degenerate`, built by hand below.
+/// real CGAL mesh, `degenerate`, built by hand below, and `gltf-instances`, a glTF 2.0 file
+/// written below and read through Assimp: several bases under several transforms (non-uniform
+/// scales among them) beside flat geometry.
 const std::vector<std::string> kScenes = {
     "soup:n=3000",
     "sphere:n=2000",
@@ -30,6 +36,7 @@ const std::vector<std::string> kScenes = {
     "instances:of=(sphere:n=400),count=6",
     "decimated:of=cgal:bunny00,faces=4000",
     "degenerate",
+    "gltf-instances",
 };
 
 const std::vector<std::string> kRaySpecs = {"primary:4096", "diffuse:2048", "shadow:2048",
@@ -61,10 +68,32 @@ std::shared_ptr<const Scene> degenerate_scene() {
   return s;
 }
 
+/// A sphere under three nodes, a cube under two (instances), a random soup used once (flattened).
+std::shared_ptr<const Scene> gltf_instances_scene() {
+  test::GltfDocument doc;
+  doc.meshes = {make_scene("sphere:n=400")->mesh, make_scene("walls:n=1")->mesh, make_scene("soup:n=200")->mesh};
+  using test::quaternion;
+  using test::trs_node;
+  const std::array<double, 4> none = {0, 0, 0, 1};
+  doc.nodes = {trs_node(0, {0, 0, 0}),
+               trs_node(0, {3, 0.5, 0}, none, {1, 2, 0.5}),
+               trs_node(-1, {-3, 0, 1}, quaternion({1, 2, 3}, 0.8), {1, 1, 1}, {3, 4}),
+               trs_node(0, {0, 0, 0}, none, {0.7, 0.7, 0.7}),
+               trs_node(1, {0, -2, 0}, none, {0.2, 0.2, 0.2}),
+               trs_node(1, {0, 2, 2}, quaternion({0, 1, 0}, 1.2), {0.3, 0.1, 0.3}),
+               trs_node(2, {0, 0, -3}, none, {2, 2, 2})};
+  doc.roots = {0, 1, 2, 5, 6};
+  const std::string path = (std::filesystem::temp_directory_path() / ("raylab_oracle_" + std::to_string(::getpid()) + ".gltf")).string();
+  test::write_gltf(path, doc);
+  auto scene = make_scene(path);
+  std::filesystem::remove(path);
+  return scene;
+}
+
 std::shared_ptr<const Scene> scene_for(const std::string& spec) {
   static std::map<std::string, std::shared_ptr<const Scene>> cache;
   auto& s = cache[spec];
-  if (!s) s = spec == "degenerate" ? degenerate_scene() : make_scene(spec);
+  if (!s) s = spec == "degenerate" ? degenerate_scene() : spec == "gltf-instances" ? gltf_instances_scene() : make_scene(spec);
   return s;
 }
 
