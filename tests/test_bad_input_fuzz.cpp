@@ -44,6 +44,10 @@ TEST(FuzzRegressions, SceneSpec) {
   EXPECT_GT(replay("scene_spec", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::scene_spec(d, s); }), 0u);
 }
 
+TEST(FuzzRegressions, SceneImport) {
+  EXPECT_GT(replay("scene_import", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::scene_import(d, s); }), 0u);
+}
+
 TEST(FuzzRegressions, RayFile) {
   EXPECT_GT(replay("ray_file", [](const std::uint8_t* d, std::size_t s) { raylab::fuzz::ray_file(d, s); }), 0u);
 }

@@ -6,6 +6,7 @@
 /// Contract under test: bad input throws raylab::InputError and nothing else; no crash, hang,
 /// leak or undefined behaviour; good input gives hits inside [tmin, tmax) on existing primitives.
 /// Any other exception escapes and aborts, which libFuzzer reports as a crash.
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "accel/common/accel_factory.h"
@@ -26,8 +28,17 @@
 #include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/ray_file.h"
+#include "scene/file_format.h"
 #include "scene/mesh_io.h"
+#include "scene/scene_import.h"
 #include "scene/scene_spec.h"
+
+/// LeakSanitizer's suppressions for every binary that runs these targets (each fuzz target, and
+/// raylab_tests through test_bad_input_fuzz.cpp; this header is included once per binary):
+/// leaks allocated inside Assimp itself. Assimp 5.2.5's FBX reader leaks on malformed input (the
+/// 10 bytes "; FBX\nn:0:" leak 40; tests/fuzz/regressions/scene_import/), a bug raylab cannot
+/// guard against and does not patch; raylab's own leaks are still reported.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }
 
 namespace raylab::fuzz {
 
@@ -58,6 +69,42 @@ inline int mesh_loader(const std::uint8_t* data, std::size_t size, const std::st
     for (const auto& t : m.triangles)
       for (auto i : t)
         if (i >= m.vertices.size()) fail("load_mesh returned an index out of range");
+  } catch (const InputError& e) {
+    if (std::strchr(e.what(), '\n')) fail(std::string("multi-line message: ") + e.what());
+  }
+  std::remove(path.c_str());
+  return 0;
+}
+
+/// import_scene on the input as a file without extension, so that its format is told by its
+/// content (file_format.h) and one target covers glTF, binary glTF, COLLADA, FBX and 3DS.
+/// Inputs that are OpenMesh formats are the mesh targets' job and skipped. The file lies alone in
+/// a per-process directory, so relative buffer URIs find nothing but what they name explicitly.
+/// A scene read must hold triangles, finite vertices, indices in range and valid instances.
+inline int scene_import(const std::uint8_t* data, std::size_t size) {
+  const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  const auto format = format_by_content(bytes.substr(0, 4096), size);
+  if (format && file_format_doc(*format).library == FileLibrary::openmesh) return 0;
+  const char* tmp = std::getenv("TMPDIR");
+  const std::string dir = std::string(tmp && *tmp ? tmp : "/tmp") + "/raylab_fuzz_import_" + std::to_string(::getpid());
+  ::mkdir(dir.c_str(), 0700);
+  const std::string path = dir + "/scene";
+  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(size));
+  try {
+    const Scene s = import_scene(path);
+    auto check_part = [](const Scene& part) {
+      for (const auto& v : part.mesh.vertices)
+        if (!is_finite(v)) fail("import_scene returned a non-finite vertex");
+      for (const auto& t : part.mesh.triangles)
+        for (auto i : t)
+          if (i >= part.mesh.vertices.size()) fail("import_scene returned an index out of range");
+    };
+    check_part(s);
+    for (const auto& b : s.bases) check_part(*b);
+    require_valid_instances(s);
+    if (describe(s).triangles == 0) fail("import_scene returned a scene without triangles");
+    const Bounds3f b = s.bounds();
+    if (!is_finite(b.lo) || !is_finite(b.hi)) fail("import_scene returned non-finite bounds");
   } catch (const InputError& e) {
     if (std::strchr(e.what(), '\n')) fail(std::string("multi-line message: ") + e.what());
   }
