@@ -4,15 +4,10 @@
 #include <vector>
 
 #include "geometry/input_error.h"
+#include "scene/little_endian.h"
 
 namespace raylab {
 namespace {
-
-std::uint64_t le_uint(std::string_view s, std::size_t at, std::size_t bytes) {
-  std::uint64_t v = 0;
-  for (std::size_t i = bytes; i-- > 0;) v = v << 8 | static_cast<unsigned char>(s[at + i]);
-  return v;
-}
 
 bool space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
 
@@ -38,7 +33,7 @@ bool in_model_properties(const std::vector<Scope>& scopes) {
 void binary_strings(std::string_view data, std::uint64_t at, std::uint64_t end, std::string_view (&strings)[2]) {
   for (auto& s : strings) {
     if (at + 5 > end || data[static_cast<std::size_t>(at)] != 'S') return;
-    const std::uint64_t length = le_uint(data, static_cast<std::size_t>(at + 1), 4);
+    const std::uint64_t length = read_le(data, static_cast<std::size_t>(at + 1), 4);
     if (at + 5 + length > end) return;
     s = data.substr(static_cast<std::size_t>(at + 5), static_cast<std::size_t>(length));
     at += 5 + length;
@@ -55,7 +50,7 @@ void check_model_property(const std::string& path, std::string_view name, std::s
 void check_binary(const std::string& path, std::string_view data) {
   constexpr std::size_t kHeader = 27;  // magic (23 bytes) and version
   if (data.size() < kHeader) throw InputError(path + ": binary FBX shorter than its 27-byte header");
-  const bool wide = le_uint(data, 23, 4) >= 7500;
+  const bool wide = read_le(data, 23, 4) >= 7500;
   const std::size_t word = wide ? 8 : 4, record_header = 3 * word + 1;
   std::vector<std::uint64_t> ends;  // of the records whose nested lists we are in
   std::vector<Scope> scopes;        // the same records
@@ -65,13 +60,13 @@ void check_binary(const std::string& path, std::string_view data) {
       ends.pop_back();
       scopes.pop_back();
     }
-    const std::uint64_t end = le_uint(data, static_cast<std::size_t>(pos), word);
+    const std::uint64_t end = read_le(data, static_cast<std::size_t>(pos), word);
     if (end == 0) {  // the null record closing a nested list (or the top level)
       if (ends.empty()) return;
       pos += record_header;
       continue;
     }
-    const std::uint64_t properties = le_uint(data, static_cast<std::size_t>(pos + 2 * word), word);
+    const std::uint64_t properties = read_le(data, static_cast<std::size_t>(pos + 2 * word), word);
     const std::uint64_t name_length = static_cast<unsigned char>(data[static_cast<std::size_t>(pos + 3 * word)]);
     const std::uint64_t first = pos + record_header + name_length, nested = first + properties;
     if (end <= pos || end > data.size() || properties > data.size() || nested > end) return;  // Assimp reports it

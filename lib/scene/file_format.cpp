@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "geometry/input_error.h"
+#include "scene/little_endian.h"
 
 namespace raylab {
 namespace {
@@ -17,12 +18,6 @@ constexpr std::size_t kHeadBytes = 4096;
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
-}
-
-std::uint32_t le_u32(std::string_view s, std::size_t at) {
-  std::uint32_t v = 0;
-  for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<unsigned char>(s[at + static_cast<std::size_t>(i)]);
-  return v;
 }
 
 bool space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
@@ -118,8 +113,8 @@ bool looks_like_utf16(std::string_view head) {
 std::optional<FileFormat> format_by_content(std::string_view head, std::uint64_t size) {
   if (head.starts_with("glTF")) return FileFormat::glb;
   if (head.starts_with("Kaydara FBX Binary")) return FileFormat::fbx;
-  if (head.size() >= 84 && 84 + 50 * static_cast<std::uint64_t>(le_u32(head, 80)) == size) return FileFormat::stl;
-  if (head.size() >= 6 && head[0] == '\x4d' && head[1] == '\x4d' && le_u32(head, 2) == size) return FileFormat::three_ds;
+  if (head.size() >= 84 && 84 + 50 * static_cast<std::uint64_t>(read_le(head, 80, 4)) == size) return FileFormat::stl;
+  if (head.size() >= 6 && head[0] == '\x4d' && head[1] == '\x4d' && read_le(head, 2, 4) == size) return FileFormat::three_ds;
   std::string_view text = head;
   if (text.starts_with("\xef\xbb\xbf")) text.remove_prefix(3);
   while (!text.empty() && space(text.front())) text.remove_prefix(1);

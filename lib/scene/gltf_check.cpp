@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "geometry/input_error.h"
+#include "scene/little_endian.h"
 
 namespace raylab {
 namespace {
@@ -19,12 +20,6 @@ using Json = nlohmann::json;
 
 constexpr std::uint64_t kNone = std::numeric_limits<std::uint64_t>::max();
 constexpr std::uint64_t kMaxCount = std::uint64_t{1} << 32;
-
-std::uint32_t le_u32(std::string_view s, std::size_t at) {
-  std::uint32_t v = 0;
-  for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<unsigned char>(s[at + static_cast<std::size_t>(i)]);
-  return v;
-}
 
 /// Deepest nesting of arrays and objects in JSON text (strings skipped); stops counting past `limit`.
 int json_depth(std::string_view text, int limit) {
@@ -92,12 +87,7 @@ std::string base64_decoded(std::string_view s) {
   return out;
 }
 
-/// Reads an unsigned little-endian integer of `bytes` bytes.
-std::uint64_t le_uint(const char* p, std::uint64_t bytes) {
-  std::uint64_t v = 0;
-  for (std::uint64_t i = bytes; i-- > 0;) v = v << 8 | static_cast<unsigned char>(p[i]);
-  return v;
-}
+
 
 std::optional<std::string> percent_decoded(const std::string& s) {
   std::string out;
@@ -144,15 +134,15 @@ class GltfChecker {
   std::string_view split_glb(std::string_view data, std::optional<std::uint64_t>& bin) {
     if (data.size() < 20) fail("binary glTF shorter than its 12-byte header and first chunk header");
     if (data.substr(0, 4) != "glTF") fail("binary glTF without the 'glTF' magic");
-    if (le_u32(data, 4) != 2) fail("binary glTF version " + std::to_string(le_u32(data, 4)) + " (raylab reads glTF 2.0)");
-    if (le_u32(data, 8) != data.size())
-      fail("binary glTF header declares " + std::to_string(le_u32(data, 8)) + " bytes, the file has " + std::to_string(data.size()));
-    const std::uint64_t json_length = le_u32(data, 12);
-    if (le_u32(data, 16) != 0x4E4F534Au) fail("the first chunk of a binary glTF must be JSON");
+    if (read_le(data, 4, 4) != 2) fail("binary glTF version " + std::to_string(read_le(data, 4, 4)) + " (raylab reads glTF 2.0)");
+    if (read_le(data, 8, 4) != data.size())
+      fail("binary glTF header declares " + std::to_string(read_le(data, 8, 4)) + " bytes, the file has " + std::to_string(data.size()));
+    const std::uint64_t json_length = read_le(data, 12, 4);
+    if (read_le(data, 16, 4) != 0x4E4F534Au) fail("the first chunk of a binary glTF must be JSON");
     if (20 + json_length > data.size()) fail("the JSON chunk runs past the end of the file");
     const std::uint64_t next = 20 + json_length;
-    if (next + 8 <= data.size() && le_u32(data, static_cast<std::size_t>(next + 4)) == 0x004E4942u) {
-      const std::uint64_t bin_length = le_u32(data, static_cast<std::size_t>(next));
+    if (next + 8 <= data.size() && read_le(data, static_cast<std::size_t>(next + 4), 4) == 0x004E4942u) {
+      const std::uint64_t bin_length = read_le(data, static_cast<std::size_t>(next), 4);
       if (next + 8 + bin_length > data.size()) fail("the BIN chunk runs past the end of the file");
       bin = bin_length;
       bin_offset_ = next + 8;
@@ -405,9 +395,11 @@ class GltfChecker {
     const View& v = views_[a.view];
     const std::uint64_t bytes = component_bytes(a.component_type);
     const std::uint64_t step = v.stride ? v.stride : bytes;
-    const char* p = buffer_bytes(v.buffer).data() + v.offset + a.offset;
+    const std::string_view data = buffer_bytes(v.buffer);
+    const std::uint64_t first = v.offset + a.offset;
     std::uint64_t largest = 0;
-    for (std::uint64_t i = 0; i < a.count; ++i) largest = std::max(largest, le_uint(p + i * step, bytes));
+    for (std::uint64_t i = 0; i < a.count; ++i)
+      largest = std::max(largest, read_le(data, static_cast<std::size_t>(first + i * step), static_cast<std::size_t>(bytes)));
     return largest;
   }
 

@@ -24,6 +24,7 @@
 #include "scene/fbx_check.h"
 #include "scene/file_format.h"
 #include "scene/gltf_check.h"
+#include "scene/little_endian.h"
 
 namespace raylab {
 namespace {
@@ -40,12 +41,6 @@ std::string read_bytes(const std::string& path, std::uint64_t count) {
   in.read(data.data(), static_cast<std::streamsize>(count));
   if (static_cast<std::uint64_t>(in.gcount()) != count) fail(path, "read error");
   return data;
-}
-
-std::uint32_t le_u32(std::string_view s, std::size_t at) {
-  std::uint32_t v = 0;
-  for (int i = 3; i >= 0; --i) v = v << 8 | static_cast<unsigned char>(s[at + static_cast<std::size_t>(i)]);
-  return v;
 }
 
 /// What raylab checks before Assimp parses the file (scene_import.h).
@@ -82,7 +77,7 @@ void check_before_assimp(const std::string& path, FileFormat format, std::uint64
     case FileFormat::three_ds: {
       const std::string head = read_bytes(path, std::min<std::uint64_t>(size, 6));
       if (head.size() < 6 || head[0] != '\x4d' || head[1] != '\x4d') fail(path, "not a 3DS file (no main chunk 0x4D4D)");
-      const std::uint32_t length = le_u32(head, 2);
+      const std::uint64_t length = read_le(head, 2, 4);
       if (length < 6 || length > size)
         fail(path, "the 3DS main chunk declares " + std::to_string(length) + " bytes, the file has " + std::to_string(size));
       break;
