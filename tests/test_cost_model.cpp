@@ -401,7 +401,8 @@ TEST(CostModelFile, BuildersTakeTheFittedConstants) {
   const auto fitted = make_accelerator("kdtree:cost=" + path, scene);
   char manual[128];
   std::snprintf(manual, sizeof manual, "kdtree:c_trav=%.17g,c_isect=%.17g", c.c_trav, c.c_isect);
-  if (c.c_leaf == 0) EXPECT_EQ(fitted->structure_hash(), make_accelerator(manual, scene)->structure_hash()) << manual;
+  ASSERT_EQ(c.c_leaf, 0.0);
+  EXPECT_EQ(fitted->structure_hash(), make_accelerator(manual, scene)->structure_hash()) << manual;
   // A ratio of 1:20 builds a deeper tree than the default 1:1.5.
   EXPECT_GT(fitted->stats().nodes, make_accelerator("kdtree", scene)->stats().nodes);
   for (const char* spec : {"bvh:cost=", "octree:cost=", "bsp:cost="}) {
