@@ -134,7 +134,7 @@ TEST(RaysGenerators, CountsAreExactAndRaysValid) {
   const Scene scene = cube_scene();
   const auto trace = tracer(scene);
   for (const char* spec : {"diffuse:1000", "shadow:777", "ao:500", "lines:1234", "edges:300", "vertices:301",
-                           "primary:100", "diffuse:1", "lines:1"}) {
+                           "touching:200", "grazing:201", "primary:100", "diffuse:1", "lines:1"}) {
     const auto rays = generate_rays(spec, scene, trace);
     const std::string s = spec;
     EXPECT_EQ(rays.size(), static_cast<std::size_t>(std::stoul(s.substr(s.find(':') + 1)))) << spec;
@@ -147,7 +147,7 @@ TEST(RaysGenerators, CountsAreExactAndRaysValid) {
 TEST(RaysGenerators, DeterministicPerSeed) {
   const Scene scene = cube_scene();
   const auto trace = tracer(scene);
-  for (const std::string name : {"diffuse", "shadow", "ao", "lines", "edges", "vertices"}) {
+  for (const std::string name : {"diffuse", "shadow", "ao", "lines", "edges", "vertices", "touching", "grazing"}) {
     const auto a = generate_rays(name + ":200", scene, trace);
     EXPECT_TRUE(same_bits(a, generate_rays(name + ":200,seed=1", scene, trace))) << name << ": default seed is 1";
     EXPECT_FALSE(same_bits(a, generate_rays(name + ":200,seed=2", scene, trace))) << name;

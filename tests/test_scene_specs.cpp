@@ -120,6 +120,31 @@ TEST(SceneSpecs, InstancesStoreOnlyTransforms) {
   EXPECT_THROW(make_scene("instances:of=(sphere:n=100),count=1000000001"), InputError);
 }
 
+// `transformed` places a scene under a similarity: far from the origin, tiny or huge, rotated.
+TEST(SceneSpecs, TransformedMovesRotatesAndScales) {
+  const auto base = make_scene("sphere:n=200");
+  const auto far = make_scene("transformed:of=(sphere:n=200),translate=1e6:-2e5:0");
+  ASSERT_EQ(far->mesh.size(), base->mesh.size());
+  EXPECT_NEAR(far->bounds().center().x, 1e6, 1.0);
+  EXPECT_NEAR(far->bounds().center().y, -2e5, 1.0);
+  EXPECT_TRUE(describe(*far).closed);
+  const auto tiny = make_scene("transformed:of=(sphere:n=200),scale=1e-6,rotate=x:90");
+  EXPECT_NEAR(tiny->bounds().diagonal().x, 2e-6, 1e-9);
+  const auto turned = make_scene("transformed:of=(sphere:n=200),rotate=0;0;1:90");
+  const Vec3f v = base->mesh.vertices[5], w = turned->mesh.vertices[5];
+  EXPECT_NEAR(w.x, -v.y, 1e-6);
+  EXPECT_NEAR(w.y, v.x, 1e-6);
+  const auto flake = make_scene("transformed:of=(sphereflake:depth=1),scale=2,translate=1e3:0:0");
+  EXPECT_FLOAT_EQ(flake->spheres.front().radius, 2.0f * make_scene("sphereflake:depth=1")->spheres.front().radius);
+  const auto inst = make_scene("transformed:of=(instances:of=(sphere:n=100),count=8),translate=0:1e4:0");
+  ASSERT_TRUE(inst->instanced());
+  EXPECT_GT(inst->bounds().lo.y, 9e3f);
+  for (const char* bad : {"transformed:of=sphere,rotate=w:3", "transformed:of=sphere,rotate=0;0;0:3",
+                          "transformed:of=sphere,translate=1:2", "transformed:of=sphere,scale=0",
+                          "transformed:of=(sphere:radius=1e10),scale=1e30", "transformed:of=sphere,spin=3"})
+    EXPECT_THROW(make_scene(bad), InputError) << bad;
+}
+
 TEST(SceneSpecs, Subdivided) {
   const auto base = make_scene("sphere:n=100");
   const auto s = make_scene("subdivided:of=(sphere:n=100),levels=2");

@@ -18,6 +18,10 @@ namespace raylab {
 /// without an Epick ray.
 bool exact_second_point(const Ray& ray, Vec3d& second);
 
+/// Set to true on the calling thread whenever an ExactFirstHit is made, i.e. a ray takes the exact
+/// path; AggregateBase reads and clears it to count RayCounters::exact_fallbacks.
+bool& exact_path_taken_on_this_thread();
+
 /// Accumulates, exactly, the first hit along one ray among the primitives offered to it.
 ///
 /// A triangle is hit when the closed triangle meets the ray segment {o + t·d : tmin <= t <= tmax}
@@ -30,6 +34,7 @@ bool exact_second_point(const Ray& ray, Vec3d& second);
 /// Degenerate (zero-area) triangles and spheres of radius <= 0 are never hit.
 class ExactFirstHit {
  public:
+  /// Sets exact_path_taken_on_this_thread().
   explicit ExactFirstHit(const Ray& ray);
   ~ExactFirstHit();
   ExactFirstHit(ExactFirstHit&&) noexcept;
@@ -45,6 +50,12 @@ class ExactFirstHit {
   /// A float that is >= the exact t of the current first hit (tmax while there is none), for
   /// conservative pruning of candidates.
   float closest_upper_bound() const;
+  /// Floats lo <= t <= hi around the exact t of the current first hit (CGAL::to_interval of the
+  /// exact number, rounded outward); requires has_hit().
+  void best_time_bounds(float& lo, float& hi) const;
+  /// The sign of (exact t of this first hit) - (exact t of other's), both for the same ray;
+  /// requires has_hit() on both.
+  int compare_time(const ExactFirstHit& other) const;
 
  private:
   struct Impl;

@@ -38,4 +38,34 @@ enum class MeshFeature { edge, vertex };
 std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std::size_t n, double distance,
                               std::uint64_t seed);
 
+/// A ray exactly through `p`: its direction is `w` with every component rounded to 8 significant
+/// bits (components below 2^-8 of the largest set to 0), its origin p - 2^k·d with the smallest
+/// k >= log2(distance / |w|) (up to 40 more) for which every coordinate is a float, so that
+/// o + 2^k·d = p holds exactly. tmin = 0, tmax = inf. False when no such k exists (or w is 0).
+bool ray_exactly_through(const Vec3f& p, const Vec3d& w, double distance, Ray& out);
+
+/// `n` rays that touch the mesh at a vertex without crossing it there (touching rays, the
+/// class of geometry/exact_contact.h): each passes exactly through a vertex v (ray_exactly_through,
+/// at distance `distance`) in a direction w = (tangent + tan(β)·normal) with a uniform tangent
+/// direction of the plane normal to the mean normal of v's fan and β uniform within ± the fan's
+/// spread (the largest angle between the mean normal and a face normal; flat fans are skipped),
+/// kept when some faces of the fan face w and some face away, and the exact classification
+/// against v's fan says the ray first meets the fan at v and touches it there: w lies outside
+/// the fan's tangent cone and its mirror. Directions are
+/// retried (64 per vertex, then another vertex). Deterministic for a given seed. Throws
+/// InputError when fewer than n can be made from 4·n + 64 vertices (no vertex with a touching
+/// direction: e.g. a flat mesh).
+std::vector<Ray> touching_vertex_rays(const TriangleMesh& mesh, std::size_t n, double distance, std::uint64_t seed);
+
+/// `n` rays aimed at points of silhouette edges, grazing: for an edge shared by two triangles
+/// with unit normals n1, n2 (not coplanar), a direction in the wedge where the two faces lie on
+/// the same side of the line, w = (n1 - n2) + γ·(n1 + n2) with |γ| < (1 - n1·n2)/(1 + n1·n2)
+/// (half of the rays uniform in the wedge, half within a relative 10^-6..1 of its ends, nearly in
+/// one face's plane), plus a uniform component along the edge of up to 60°; the target is a
+/// uniform point of the edge rounded to float, so the ray passes within rounding of the edge:
+/// touching, a near-miss or a crossing by a few ulps (ill-conditioned rays). Origin at
+/// `distance` before the target. Deterministic for a given seed. Throws InputError when the mesh
+/// has no edge shared by two non-coplanar triangles.
+std::vector<Ray> grazing_edge_rays(const TriangleMesh& mesh, std::size_t n, double distance, std::uint64_t seed);
+
 }  // namespace raylab

@@ -46,6 +46,15 @@ const std::vector<RayGeneratorDoc>& docs() {
       {"vertices", "vertices:N",
        "Rays crossing the mesh from the outside exactly at a random vertex (feature_rays.h); triangle meshes only.",
        {kSeedDoc}},
+      {"touching", "touching:N",
+       "Rays through mesh vertices exactly, outside the tangent cone of the vertex's fan: each touches the surface at "
+       "the vertex without crossing it there (decided exactly; feature_rays.h); triangle meshes only.",
+       {kSeedDoc}},
+      {"grazing", "grazing:N",
+       "Rays aimed at points of silhouette edges (edges of two non-coplanar triangles), in the wedge where both faces "
+       "lie on one side of the line, half of them nearly in a face's plane: touching, missing or crossing the surface "
+       "by a few ulps (feature_rays.h); triangle meshes only.",
+       {kSeedDoc}},
       {"file", "file:PATH",
        "The rays of a ray file (ray_file.h); everything after 'file:' is the path.",
        {}},
@@ -131,10 +140,24 @@ std::vector<Ray> generate_rays(const std::string& spec, const Scene& scene, cons
     const double radius = 1.01 * 0.5 * diagonal;
     return isotropic_lines(b.center(), radius > 0.0 ? radius : 1.0, count, seed);
   }
-  // edges, vertices
+  // edges, vertices, touching, grazing
   if (scene.instanced() || scene.mesh.size() == 0)
     throw InputError(prefix(spec) + "needs a triangle mesh; the scene is " +
                      (scene.instanced() ? "instanced" : "spheres only"));
+  if (name == "touching") {
+    try {
+      return touching_vertex_rays(scene.mesh, count, 1e-2 * diagonal, seed);
+    } catch (const InputError& e) {
+      throw InputError(prefix(spec) + e.what());
+    }
+  }
+  if (name == "grazing") {
+    try {
+      return grazing_edge_rays(scene.mesh, count, 1e-2 * diagonal, seed);
+    } catch (const InputError& e) {
+      throw InputError(prefix(spec) + e.what());
+    }
+  }
   try {
     return feature_rays(scene.mesh, name == "edges" ? MeshFeature::edge : MeshFeature::vertex, count,
                         1e-2 * diagonal, seed);

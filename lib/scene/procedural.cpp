@@ -365,4 +365,26 @@ Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c
   return s;
 }
 
+Scene make_transformed(const Scene& of, const TransformedConfig& c) {
+  require(c.scale >= 1e-30 && c.scale <= 1e30, "transformed: scale must be in [1e-30, 1e30]");
+  require(length(c.axis) > 0.0 && is_finite(c.axis), "transformed: the rotation axis must be a non-zero vector");
+  require(std::isfinite(c.degrees) && is_finite(c.translate), "transformed: rotate and translate must be finite");
+  const AffineTransform xf = AffineTransform::translation(c.translate) *
+                             AffineTransform::rotation(c.axis, c.degrees * std::numbers::pi / 180.0) *
+                             AffineTransform::scaling(Vec3d(c.scale));
+  Scene s;
+  if (of.instanced()) {
+    s.base = of.base;
+    s.instances.reserve(of.instances.size());
+    for (const auto& inst : of.instances) s.instances.push_back(xf * inst);
+    return s;
+  }
+  s.mesh = of.mesh;
+  for (auto& v : s.mesh.vertices) v = xf.apply_point(v);
+  s.spheres.reserve(of.spheres.size());
+  for (const auto& sp : of.spheres)
+    s.spheres.push_back({xf.apply_point(sp.center), static_cast<float>(double(sp.radius) * c.scale)});
+  return s;
+}
+
 }  // namespace raylab

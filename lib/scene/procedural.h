@@ -110,6 +110,20 @@ struct InstancesConfig {
 };
 Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c);
 
+/// `transformed:of=SPEC,rotate=AXIS:DEG,translate=X:Y:Z,scale=S` — a scene placed under the
+/// similarity p -> translate + scale·R(AXIS, DEG)·p, so that "far from the origin" (translate
+/// 1e6:0:0) and "tiny" (scale=1e-6) are one spec away. AXIS is x, y, z or a vector a;b;c (not 0).
+/// The transform is applied in double to every vertex and sphere centre, then rounded to float
+/// (radius: scale·radius rounded); an instanced scene keeps its base and composes the transform
+/// with every instance's. scale in [1e-30, 1e30], default 1; DEG default 0; translate default 0.
+struct TransformedConfig {
+  Vec3d axis{0.0, 0.0, 1.0};
+  double degrees = 0.0;
+  Vec3d translate{0.0, 0.0, 0.0};
+  double scale = 1.0;
+};
+Scene make_transformed(const Scene& of, const TransformedConfig& c);
+
 /// The lecture's largest scene, "3.1 billion triangles" by instancing: 10,300 instances (a
 /// 22x22x22 grid, partly filled) of the Stanford bunny (cgal:bunny00, 75,408 triangles) after
 /// one level of Loop subdivision (301,632 triangles): 3,106,809,600 triangles. Only the base

@@ -63,6 +63,35 @@ bool is_regular_file(const std::string& path) {
   return std::filesystem::is_regular_file(path, ec);
 }
 
+/// Three finite numbers separated by `sep`, e.g. `1e4:0:-2` (key names the parameter).
+Vec3d parse_vector(const std::string& spec, const std::string& key, const std::string& text, char sep) {
+  Vec3d v;
+  std::size_t start = 0;
+  for (int a = 0; a < 3; ++a) {
+    const std::size_t end = a < 2 ? text.find(sep, start) : text.size();
+    if (end == std::string::npos || !parse_double(std::string_view(text).substr(start, end - start), v[a]))
+      throw InputError("spec " + quoted(spec) + ": " + key + "=" + text + " is not three numbers separated by '" +
+                       std::string(1, sep) + "'");
+    start = end + 1;
+  }
+  return v;
+}
+
+/// `AXIS:DEG` with AXIS x, y, z or a;b;c.
+void parse_rotation(const std::string& spec, const std::string& text, Vec3d& axis, double& degrees) {
+  const std::size_t colon = text.rfind(':');
+  const std::string what = "spec " + quoted(spec) + ": rotate=" + text;
+  if (colon == std::string::npos || !parse_double(std::string_view(text).substr(colon + 1), degrees) ||
+      std::abs(degrees) > 1e6)
+    throw InputError(what + " is not AXIS:DEG (AXIS x, y, z or a;b;c; |DEG| <= 1e6)");
+  const std::string a = text.substr(0, colon);
+  if (a == "x") axis = {1, 0, 0};
+  else if (a == "y") axis = {0, 1, 0};
+  else if (a == "z") axis = {0, 0, 1};
+  else axis = parse_vector(spec, "rotate axis", a, ';');
+  if (!(length(axis) > 0.0) || !std::isfinite(length(axis))) throw InputError(what + ": the axis is the zero vector");
+}
+
 std::shared_ptr<Scene> build(const std::string& text) {
   const std::string head = text.substr(0, text.find(':'));
   // A bare path: one with a scene file extension, or the name of an existing file (which may
@@ -135,6 +164,16 @@ std::shared_ptr<Scene> build(const std::string& text) {
     const std::int64_t faces = r.get_int("faces", 1000, 1, std::int64_t{1} << 27);
     r.finish(params);
     *scene = make_decimated(*make_scene(of), faces);
+  } else if (name == "transformed") {
+    TransformedConfig c;
+    const std::string of = r.get_string("of", "cgal:bunny00");
+    const std::string rotate = r.get_string("rotate", "z:0");
+    const std::string translate = r.get_string("translate", "0:0:0");
+    c.scale = r.get_double("scale", 1.0, 1e-30, 1e30);
+    r.finish(params);
+    parse_rotation(text, rotate, c.axis, c.degrees);
+    c.translate = parse_vector(text, "translate", translate, ':');
+    *scene = make_transformed(*make_scene(of), c);
   } else if (name == "instances") {
     InstancesConfig c;
     const std::string of = r.get_string("of", "cgal:bunny00");
@@ -234,6 +273,11 @@ const std::vector<SceneKindDoc>& scene_kinds() {
        {{"of", "cgal:bunny00", "the scene to subdivide"}, {"levels", "1", "levels (x4 triangles each), in [0, 10]"}}},
       {"decimated", "quadric decimation (OpenMesh) of a triangle scene",
        {{"of", "cgal:bunny00", "the scene to decimate"}, {"faces", "1000", "target triangle count, in [1, 2^27]"}}},
+      {"transformed", "a scene under a similarity: rotated, scaled and moved (far from the origin, or tiny)",
+       {{"of", "cgal:bunny00", "the scene to transform"},
+        {"rotate", "z:0", "AXIS:DEG, AXIS x | y | z | a;b;c: rotation about the axis through the origin"},
+        {"translate", "0:0:0", "X:Y:Z, applied after rotation and scaling"},
+        {"scale", "1", "uniform scale about the origin, in [1e-30, 1e30]"}}},
       {"instances", "copies of a scene on a grid, each slightly rotated (transforms only)",
        {{"of", "cgal:bunny00", "the base scene"},
         {"count", "1000", "number of instances, in [1, 2^24]"},

@@ -25,7 +25,7 @@ bool is_any_hit_ray_spec(const std::string& spec) {
 
 bool is_feature_ray_spec(const std::string& spec) {
   const std::string name = parse_spec(spec).name;
-  return name == "edges" || name == "vertices";
+  return name == "edges" || name == "vertices" || name == "touching" || name == "grazing";
 }
 
 }  // namespace raylab

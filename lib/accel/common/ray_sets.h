@@ -17,7 +17,8 @@ std::vector<Ray> make_ray_set(const std::string& spec, const std::shared_ptr<con
 /// True for ray kinds traced as any-hit (occluded) queries: `shadow` and `ao`.
 bool is_any_hit_ray_spec(const std::string& spec);
 
-/// True for ray kinds aimed at edges and vertices, to which AccuracyBound's feature bound applies.
+/// True for ray kinds aimed at edges and vertices (edges, vertices, touching, grazing), to which
+/// AccuracyBound's feature bound applies.
 bool is_feature_ray_spec(const std::string& spec);
 
 }  // namespace raylab

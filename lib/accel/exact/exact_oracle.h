@@ -6,6 +6,7 @@
 /// orders the hits exactly. Instanced scenes are flattened first (flatten_instances: every base
 /// under every instance transform, beside the flat geometry), which is the geometry the oracle
 /// then answers for; its hits name instance and primitive as scene.h describes.
+#include <functional>
 #include <memory>
 
 #include "scene/primitive.h"
@@ -25,5 +26,11 @@ std::unique_ptr<Aggregate> make_exact_oracle(std::shared_ptr<const Scene> scene)
 /// the same order. Throws InputError when the copy would exceed kExactOracleMaxPrimitives, for an
 /// invalid instance (require_valid_instances), and for spheres under a non-uniform scale.
 std::shared_ptr<const Scene> flatten_instances(const Scene& scene);
+
+/// `make(flatten_instances(scene))`, reporting hits as (instance, prim) like instanced
+/// accelerators: how the oracle, and every accelerator with kernel=certified, answer for an
+/// instanced scene (the flat copy is the geometry the exact answer is defined on).
+std::unique_ptr<Aggregate> make_over_flattened_instances(
+    const Scene& scene, const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make);
 
 }  // namespace raylab
