@@ -8,12 +8,11 @@
 /// faces, coplanar and duplicated triangles, degenerate triangles, extreme coordinates, rays on
 /// surfaces and grazing rays, and piles of identical triangles (deep or degenerate trees).
 ///
-/// Which AccuracyBound applies (accel_factory.h): rays of `feature_rays` (edges:/vertices:) on a
-/// closed mesh cross the surface transversally, so they get the closed-feature bound. Every other
-/// hand-built ray that passes exactly through an edge, a vertex or a triangle's plane may touch
-/// the surface without crossing it (a silhouette vertex, a coplanar sheet, an origin on the
-/// surface): there the exact answer turns on the last bit, as at an open mesh's boundary, so
-/// those cases get the open-feature bound. Rays in general position get the bound for other rays.
+/// Which AccuracyBound applies (accel_factory.h): the exact oracle classifies every ray
+/// (crossing, touching, on-surface, ill-conditioned; contact_classes.h) and each class has its
+/// own bound. Cases whose rays are aimed at edges, vertices or planes count as feature-aimed
+/// (the bound for crossings of edge/vertex-aimed rays, which methods that are not watertight
+/// need); rays in general position get the bound for other rays.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -37,6 +36,10 @@ enum class RayClass {
   general,          ///< rays in general position
 };
 
+inline const char* ray_class_name(RayClass c) {
+  return c == RayClass::closed_features ? "closed_features" : c == RayClass::open_features ? "open_features" : "general";
+}
+
 struct Case {
   std::string name;    ///< e.g. "split_planes"
   std::string detail;  ///< one line for the report
@@ -44,9 +47,8 @@ struct Case {
   std::vector<Ray> rays;
   RayClass ray_class = RayClass::general;
 
-  /// A representative ray spec and closedness for AccuracyBound::max_mismatch_rate.
-  std::string bound_ray_spec() const { return ray_class == RayClass::general ? "lines:1" : "edges:1"; }
-  bool bound_closed() const { return ray_class == RayClass::closed_features; }
+  /// Whether AccuracyBound's bound for feature-aimed crossings applies.
+  bool feature_rays() const { return ray_class != RayClass::general; }
 };
 
 /// Every accelerator spec the factory knows, with its listed variants (as the oracle suite runs
@@ -190,13 +192,47 @@ inline std::vector<std::string> closed_cgal_meshes(std::size_t max_triangles) {
   return names;
 }
 
-/// Shared edges and vertices of a closed mesh: rays aimed exactly at them (feature_rays).
-inline Case shared_edges_case(const std::string& name, std::shared_ptr<const Scene> scene, std::size_t n) {
-  Case c{"shared_edges/" + name, "rays aimed exactly at shared edges and vertices", scene, {}, RayClass::closed_features};
+/// Shared edges and vertices of a closed mesh: rays aimed exactly at them (feature_rays), and,
+/// with `touching` (on closed meshes), n/2 rays touching it at vertices and n/2 grazing its
+/// silhouette edges.
+inline Case shared_edges_case(const std::string& name, std::shared_ptr<const Scene> scene, std::size_t n,
+                              bool touching = false) {
+  Case c{"shared_edges/" + name,
+         touching ? "rays aimed exactly at shared edges and vertices; rays touching vertices, grazing silhouette edges"
+                  : "rays aimed exactly at shared edges and vertices",
+         scene, {}, RayClass::closed_features};
   if (!describe(*scene).closed) c.ray_class = RayClass::open_features;
   detail::append_rays(c.rays, make_ray_set("edges:" + std::to_string(n), scene));
   detail::append_rays(c.rays, make_ray_set("vertices:" + std::to_string(n), scene));
+  if (touching && c.ray_class == RayClass::closed_features) {
+    const std::string half = std::to_string(std::max<std::size_t>(1, n / 2));
+    try {
+      detail::append_rays(c.rays, make_ray_set("touching:" + half, scene));
+    } catch (const InputError&) {  // a mesh without a vertex the generator can touch
+    }
+    detail::append_rays(c.rays, make_ray_set("grazing:" + half, scene));
+  }
   return c;
+}
+
+/// A closed mesh far from the origin (offsets 1e3 and 1e6), tiny (scale 1e-6) and huge (1e6),
+/// rotated, through the `transformed` scene kind: edge-, vertex-aimed, touching and grazing rays
+/// and random lines.
+inline std::vector<Case> transformed_cases(const std::string& mesh_spec, std::size_t n) {
+  std::vector<Case> cases;
+  for (const auto& [label, transform] : std::vector<std::pair<std::string, std::string>>{
+           {"offset1e3", "rotate=1;2;3:40,translate=1e3:-2e3:5e2"},
+           {"offset1e6", "rotate=x:30,translate=1e6:3e5:-2e5"},
+           {"scale1e-6", "rotate=y:70,scale=1e-6"},
+           {"scale1e6", "rotate=z:10,scale=1e6,translate=2e6:0:0"}}) {
+    const std::string spec = "transformed:of=(" + mesh_spec + ")," + transform;
+    Case c = shared_edges_case(label, make_scene(spec), n, true);
+    c.name = "transformed/" + label;
+    c.detail = "`" + spec + "`: edge-, vertex-aimed, touching and grazing rays, random lines";
+    detail::append_rays(c.rays, detail::random_lines(c.scene->bounds(), n, 61));
+    cases.push_back(std::move(c));
+  }
+  return cases;
 }
 
 /// All cases except the CGAL meshes; `n` scales the ray counts (a few hundred rays each at n=1).

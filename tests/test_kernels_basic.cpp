@@ -1,7 +1,8 @@
-// Contract tests of the three ray-triangle kernels on hand-made configurations whose answers
+// Contract tests of the four ray-triangle kernels on hand-made configurations whose answers
 // are known exactly.
 #include <gtest/gtest.h>
 
+#include "geometry/certified_kernel.h"
 #include "geometry/exact_predicates.h"
 #include "geometry/triangle_kernels.h"
 
@@ -21,7 +22,7 @@ bool hits(const Ray& ray, const Vec3f& a, const Vec3f& b, const Vec3f& c, Triang
 
 template <class K>
 class KernelContract : public ::testing::Test {};
-using AllKernels = ::testing::Types<MollerTrumboreKernel, WatertightKernel, ExactKernel>;
+using AllKernels = ::testing::Types<MollerTrumboreKernel, WatertightKernel, ExactKernel, CertifiedKernel>;
 TYPED_TEST_SUITE(KernelContract, AllKernels);
 
 TYPED_TEST(KernelContract, InteriorHitReportsTAndBarycentrics) {

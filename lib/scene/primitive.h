@@ -12,6 +12,7 @@
 #include <string>
 
 #include "geometry/bounds.h"
+#include "geometry/exact_predicates.h"
 #include "geometry/ray.h"
 #include "scene/ray_counters.h"
 
@@ -61,6 +62,36 @@ class Aggregate : public Primitive {
   virtual std::optional<std::uint64_t> structure_hash() const { return std::nullopt; }
 };
 
+/// Counts one ray into RayCounters::exact_fallbacks when it took the exact path anywhere below
+/// the outermost counted aggregate call on this thread (nested aggregates, instances), read from
+/// exact_path_taken_on_this_thread(). Only the counted virtuals use it: timed runs pay nothing.
+class ExactPathTally {
+ public:
+  explicit ExactPathTally(RayCounters& counters) : counters_(counters) {
+    if (depth()++ == 0) exact_path_taken_on_this_thread() = false;
+  }
+  ~ExactPathTally() {
+    if (--depth() == 0 && exact_path_taken_on_this_thread()) ++counters_.exact_fallbacks;
+  }
+  ExactPathTally(const ExactPathTally&) = delete;
+  ExactPathTally& operator=(const ExactPathTally&) = delete;
+
+ private:
+  static int& depth() {
+    thread_local int d = 0;
+    return d;
+  }
+  RayCounters& counters_;
+};
+
+/// For any-hit queries: the ray a kernel with a half-open [tmin, tmax) should see
+/// (closed_for_any_hit), or the ray itself for a kernel that accepts the closed interval.
+template <class Kernel>
+inline Ray any_hit_ray(const Ray& ray) {
+  if constexpr (requires { Kernel::kClosedInterval; }) return ray;
+  else return closed_for_any_hit(ray);
+}
+
 /// Implements Primitive's four virtuals for an accelerator whose traversal is
 ///   template <class Counters> bool intersect_impl(Ray&, Hit&, Counters&) const;
 ///   template <class Counters> bool occluded_impl(const Ray&, Counters&) const;
@@ -75,6 +106,7 @@ class AggregateBase : public Aggregate {
   }
   bool intersect(Ray& ray, Hit& hit, RayCounters& counters) const final {
     if (!is_valid(ray)) return false;
+    const ExactPathTally tally(counters);
     return self().intersect_impl(ray, hit, counters);
   }
   bool occluded(const Ray& ray) const final {
@@ -84,6 +116,7 @@ class AggregateBase : public Aggregate {
   }
   bool occluded(const Ray& ray, RayCounters& counters) const final {
     if (!is_valid(ray)) return false;
+    const ExactPathTally tally(counters);
     return self().occluded_impl(ray, counters);
   }
 

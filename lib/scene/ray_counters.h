@@ -11,6 +11,9 @@ struct RayCounters {
   std::uint64_t prim_tests = 0;     ///< ray-primitive intersection tests
   std::uint64_t prim_hits = 0;      ///< tests that found a hit closer than the closest so far (pbrt's "Ray/Tri hits")
   std::uint64_t mailbox_skips = 0;  ///< tests saved by a mailbox
+  /// Rays that took the exact path (made an ExactFirstHit: the certified kernel's fallback, or
+  /// every ray of the exact kernels), counted once per ray by AggregateBase.
+  std::uint64_t exact_fallbacks = 0;
 
   static constexpr bool enabled = true;
   void node() { ++nodes; }
@@ -20,6 +23,7 @@ struct RayCounters {
   void mailbox_skip() { ++mailbox_skips; }
   RayCounters& operator+=(const RayCounters& o) {
     nodes += o.nodes; leaves += o.leaves; prim_tests += o.prim_tests; prim_hits += o.prim_hits; mailbox_skips += o.mailbox_skips;
+    exact_fallbacks += o.exact_fallbacks;
     return *this;
   }
 };

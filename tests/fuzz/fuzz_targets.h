@@ -168,6 +168,7 @@ inline double spec_size_bound(const std::string& text) {
   if (kind == "soup") return spec_number(spec, "n");
   if (kind == "subdivided") return nested("of") * std::pow(4.0, std::min(spec_number(spec, "levels"), 64.0));
   if (kind == "instances") return nested("of") + spec_number(spec, "count");
+  if (kind == "transformed") return nested("of");
   return 0;
 }
 
@@ -291,6 +292,16 @@ inline int build_and_trace(const std::uint8_t* data, std::size_t size) {
     if (spec == "brute:kernel=exact")
       for (std::size_t i = 0; i < rays.size(); ++i)
         if (res.hits[i].valid() != oracle_hits[i].valid()) fail("the exact kernel and the exact oracle disagree on ray " + std::to_string(i));
+    // Methods stated exact (every kernel=certified) must give the oracle's first hit by the exact
+    // rule, and the oracle's any-hit answer.
+    if (accuracy_bound(spec).exact) {
+      const HitComparison c = compare_hits_exact(*scene, rays, res.hits, oracle_hits);
+      if (c.mismatches != 0)
+        fail(spec + ": disagrees with the exact oracle on ray " + std::to_string(c.first_mismatches.front()));
+      for (std::size_t i = 0; i < rays.size(); ++i)
+        if (bool(occ.blocked[i]) != oracle_hits[i].valid())
+          fail(spec + ": any-hit disagrees with the exact oracle on ray " + std::to_string(i));
+    }
   }
   return 0;
 }

@@ -33,8 +33,7 @@ class BruteForce final : public AggregateBase<BruteForce<Kernel>> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
-    auto ctx = Kernel::prepare(closed);
+    auto ctx = Kernel::prepare(any_hit_ray<Kernel>(ray));
     Hit hit;
     const auto n = static_cast<unsigned>(scene_->primitive_count());
     counters.leaf();

@@ -27,6 +27,7 @@ BspConfig read_bsp_config(SpecReader& r) {
   c.axis_candidates = static_cast<int>(r.get_int("axis_candidates", 2, 0, 64));
   c.leaf_size = static_cast<int>(r.get_int("leaf_size", 4, 1, 1 << 20));
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 48));
+  c.kernel = read_kernel_choice(r);
   return c;
 }
 
@@ -34,7 +35,7 @@ namespace {
 
 std::unique_ptr<Aggregate> make_bsp(std::shared_ptr<const Scene> scene, const BspConfig& config) {
   if (scene->instanced())
-    return make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> base) {
+    return make_instanced_for_kernel(config.kernel, *scene, [&](std::shared_ptr<const Scene> base) {
       return make_bsp(std::move(base), config);
     });
   return std::make_unique<BspTree>(std::move(scene), config);
@@ -53,15 +54,13 @@ AccelKind make_bsp_kind() {
            {"triangle_candidates", "6", "supporting planes tried per node"},
            {"axis_candidates", "2", "axis-aligned planes tried per axis and node"},
            {"leaf_size", "4", "nodes with at most this many primitives become leaves"},
-           {"max_depth", "0", "safety depth limit; 0 = 6 + 1.3 log2 N, at most 48"}},
+           {"max_depth", "0", "safety depth limit; 0 = 6 + 1.3 log2 N, at most 48"},
+           kernel_param_doc()},
           [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_bsp(std::move(scene), read_bsp_config(r)); },
           [](SpecReader& r) -> AccuracyBound {
-            read_bsp_config(r);
-            return {0.0, 0.5, 0.0,
-                    "exact agreement (watertight kernel, exact classification, error-bounded traversal), except on "
-                    "rays grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
+            return kernel_accuracy(read_bsp_config(r).kernel, "exact classification, error-bounded traversal");
           },
-          {"axis_candidates=0", "cost=default"}};
+          {"axis_candidates=0", "cost=default", "kernel=certified"}};
 }
 
 namespace {

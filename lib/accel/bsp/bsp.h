@@ -23,17 +23,19 @@ class BspTree final : public AggregateBase<BspTree> {
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
     const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
-    const bool found = bsp_traverse<WatertightKernel, false>(view, ray, hit, counters);
+    const bool found = config_.kernel == KernelChoice::certified
+                           ? bsp_traverse<CertifiedKernel, false>(view, ray, hit, counters)
+                           : bsp_traverse<WatertightKernel, false>(view, ray, hit, counters);
     if (found) ray.tmax = hit.t;
     return found;
   }
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
     const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
-    return bsp_traverse<WatertightKernel, true>(view, closed, hit, counters);
+    if (config_.kernel == KernelChoice::certified) return bsp_traverse<CertifiedKernel, true>(view, ray, hit, counters);
+    return bsp_traverse<WatertightKernel, true>(view, closed_for_any_hit(ray), hit, counters);
   }
 
  private:

@@ -1,5 +1,6 @@
 #pragma once
 /// Parameters of the BSP tree (`bsp:key=value,...`).
+#include "accel/common/kernel_choice.h"
 #include "accel/kdtree/sah_cost.h"
 
 namespace raylab {
@@ -16,6 +17,7 @@ struct BspConfig {
   int leaf_size = 4;
   /// Safety depth limit; 0 means 6 + 1.3·log2(N), at most 48.
   int max_depth = 0;
+  KernelChoice kernel = KernelChoice::watertight;
 };
 
 int bsp_max_depth(const BspConfig& config, std::size_t n);

@@ -26,7 +26,7 @@ template <class Kernel, bool kAnyHit, class Counters>
 bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
   float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
   auto ctx = Kernel::prepare(ray);
   const Vec3d o(ray.org), d(ray.dir);
   struct Entry {

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "accel/common/structure_hash.h"
+#include "geometry/input_error.h"
 
 namespace raylab {
 
@@ -42,6 +43,7 @@ std::vector<ParamDoc> bvh_params() {
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
           {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
           {"robust", "on", "on: Ize's conservative box test + watertight kernel | off: the fast variant"},
+          kernel_param_doc(),
           {"threads", "0", "build threads; 0 = all"}};
 }
 
@@ -65,6 +67,9 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
   c.robust = r.get_bool("robust", true);
+  c.kernel = read_kernel_choice(r);
+  if (c.kernel == KernelChoice::certified && !c.robust)
+    throw InputError("accelerator '" + r.spec().text + "': kernel=certified needs the conservative box test (robust=on)");
   c.threads = static_cast<int>(r.get_int("threads", 0, 0, 1024));
   return c;
 }
@@ -73,7 +78,7 @@ namespace {
 
 std::unique_ptr<Aggregate> make_bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config) {
   if (scene->instanced())
-    return make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> base) {
+    return make_instanced_for_kernel(config.kernel, *scene, [&](std::shared_ptr<const Scene> base) {
       return make_bvh(std::move(base), config);
     });
   return std::make_unique<Bvh>(std::move(scene), config);
@@ -87,18 +92,18 @@ AccelKind make_bvh_kind() {
           bvh_params(),
           [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_bvh(std::move(scene), read_bvh_config(r)); },
           [](SpecReader& r) -> AccuracyBound {
-            if (read_bvh_config(r).robust)
-              return {0.0, 0.5, 0.0,
-                      "exact agreement (Ize's conservative box test, watertight kernel), except on rays grazing "
-                      "open meshes exactly at an edge or vertex (bound there: 50%)"};
-            return {0.5, 0.9, 1e-3,
-                    "the fast variant (plain slab test, Moller-Trumbore) may lose rays through shared edges and "
-                    "vertices (bound: 50% of edge/vertex-aimed rays on closed meshes, 90% on open ones, 0.1% of "
-                    "others)"};
+            const BvhConfig c = read_bvh_config(r);
+            if (c.robust) return kernel_accuracy(c.kernel, "Ize's conservative box test");
+            return float_accuracy(0.5, 1e-3,
+                                  "the fast variant (plain slab test, Moller-Trumbore) may lose crossing rays through "
+                                  "shared edges and vertices (bound: 50% of edge/vertex-aimed crossing rays, 0.1% of "
+                                  "other crossing rays); touching, on-surface and ill-conditioned rays: no agreement "
+                                  "claimed");
           },
           {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
-           "builder=sweep", "cost=default", "width=2,cost=default"}};
+           "builder=sweep", "cost=default", "width=2,cost=default", "kernel=certified", "kernel=certified,width=4",
+           "kernel=certified,width=2"}};
 }
 
 namespace {

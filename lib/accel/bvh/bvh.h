@@ -3,7 +3,9 @@
 /// (bvh_build.h for the builders; bvh_traversal.h traverses the binary tree, width=2;
 /// wide_bvh_traversal.h the 4- or 8-wide tree collapsed from it, with packed leaves). The robust
 /// default pairs Ize's conservative box test with the watertight kernel; `robust=off` is the
-/// fast variant.
+/// fast variant; `kernel=certified` pairs Ize's test with the certified kernel, whose closest()
+/// bound is raised past the rounding of the box entries (certified_kernel.h), so no box the
+/// exact ray touches before the exact first hit is pruned.
 #include <memory>
 
 #include "accel/bvh/bvh_build.h"
@@ -33,16 +35,18 @@ class Bvh final : public AggregateBase<Bvh> {
 
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
-    const bool found = config_.robust ? trace<WatertightKernel, true, false>(ray, hit, counters)
-                                      : trace<MollerTrumboreKernel, false, false>(ray, hit, counters);
+    const bool found = config_.kernel == KernelChoice::certified ? trace<CertifiedKernel, true, false>(ray, hit, counters)
+                       : config_.robust ? trace<WatertightKernel, true, false>(ray, hit, counters)
+                                        : trace<MollerTrumboreKernel, false, false>(ray, hit, counters);
     if (found) ray.tmax = hit.t;
     return found;
   }
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
+    if (config_.kernel == KernelChoice::certified) return trace<CertifiedKernel, true, true>(ray, hit, counters);
+    const Ray closed = closed_for_any_hit(ray);
     return config_.robust ? trace<WatertightKernel, true, true>(closed, hit, counters)
                           : trace<MollerTrumboreKernel, false, true>(closed, hit, counters);
   }
@@ -56,7 +60,7 @@ class Bvh final : public AggregateBase<Bvh> {
     typename Kernel::Context ctx = Kernel::prepare(ray);
     const Scene& scene = *scene_;
     const std::uint32_t* prims = tree_.prims.data();
-    float closest = ray.tmax;
+    float closest = Kernel::closest(ctx);
     return traverse_bvh2<kRobust, kAnyHit>(
         tree_.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
           bool found = false;
@@ -85,7 +89,7 @@ class Bvh final : public AggregateBase<Bvh> {
     }
     const Scene& scene = *scene_;
     const TrianglePacket* packets = wide.packets.data();
-    float closest = ray.tmax;
+    float closest = initial_closest<Kernel>(ray);
     return traverse_wide_bvh<N, kRobust, kAnyHit>(
         wide.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
           if (!prepared) {

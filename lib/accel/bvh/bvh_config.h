@@ -2,6 +2,8 @@
 /// Parameters of the BVH (`bvh:key=value,...`); the factory fills them and rejects others.
 #include <cstddef>
 
+#include "accel/common/kernel_choice.h"
+
 namespace raylab {
 
 enum class BvhBuilder {
@@ -40,6 +42,8 @@ struct BvhConfig {
   /// Ize's conservative slab test and the watertight triangle kernel; off gives the `fast`
   /// variant (plain slab test, Moller-Trumbore), held by the oracle suite to its stated bound.
   bool robust = true;
+  /// The triangle/sphere kernel of the robust traversal; certified requires robust.
+  KernelChoice kernel = KernelChoice::watertight;
   /// Build threads; 0 means every hardware thread.
   int threads = 0;
 };

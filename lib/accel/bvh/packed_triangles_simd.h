@@ -14,11 +14,18 @@
 ///    contraction), and lanes with an edge function equal to zero redo the paper's
 ///    double-precision fallback in scalar, so decisions, t, u and v are bit-identical.
 ///  - Möller-Trumbore (JGT 1997), the fast variant: fused multiply-adds, no bit-identity claim.
+///  - Certified (certified_kernel.h): the edge functions and their error bound B for four
+///    triangles at once, by the same IEEE operations the bound's derivation counts; lanes whose
+///    edge functions surely have opposite signs are misses, every other filled lane goes, in
+///    lane order, to CertifiedKernel::decide_triangle with its U, V, W and B, which certifies or
+///    asks the exact path. The contract holds with "the scalar Kernel" read as "the certified
+///    kernel": the reported lane is the last one that became the first hit.
 #include <bit>
 #include <cmath>
 
 #include "accel/bvh/packed_triangles.h"
 #include "accel/bvh/simd.h"
+#include "geometry/certified_kernel.h"
 #include "geometry/triangle_kernels.h"
 #include "scene/scene_primitives.h"
 
@@ -91,6 +98,66 @@ struct PacketKernel<WatertightKernel> {
     c.tmax = ts[best];
     hit = {ts[best], us[best], vs[best]};
     return best;
+  }
+};
+
+template <>
+struct PacketKernel<CertifiedKernel> {
+  using F = simd::Float<kPacketWidth>;
+  struct Ray {
+    F ox, oy, oz, sx, sy;
+    Ray() = default;
+    explicit Ray(const CertifiedKernel::Context& c)
+        : ox(F::broadcast(c.ray.org[c.kx])),
+          oy(F::broadcast(c.ray.org[c.ky])),
+          oz(F::broadcast(c.ray.org[c.kz])),
+          sx(F::broadcast(c.sx)),
+          sy(F::broadcast(c.sy)) {}
+  };
+
+  template <bool kAnyHit>
+  static int intersect(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
+    const unsigned filled = (1u << p.size()) - 1;
+    if (!c.filter) {  // no float filter for this ray: every lane is decided exactly
+      int last = -1;
+      for (unsigned m = filled; m != 0; m &= m - 1) {
+        const int i = std::countr_zero(m);
+        if (CertifiedKernel::intersect(c, p.prim[i], p.vertex(i, 0), p.vertex(i, 1), p.vertex(i, 2), hit)) {
+          last = i;
+          if constexpr (kAnyHit) return i;
+        }
+      }
+      return last;
+    }
+    const F az0 = F::load(p.v[0][c.kz]) - r.oz, bz0 = F::load(p.v[1][c.kz]) - r.oz, cz0 = F::load(p.v[2][c.kz]) - r.oz;
+    const F ax = (F::load(p.v[0][c.kx]) - r.ox) - r.sx * az0, ay = (F::load(p.v[0][c.ky]) - r.oy) - r.sy * az0;
+    const F bx = (F::load(p.v[1][c.kx]) - r.ox) - r.sx * bz0, by = (F::load(p.v[1][c.ky]) - r.oy) - r.sy * bz0;
+    const F cx = (F::load(p.v[2][c.kx]) - r.ox) - r.sx * cz0, cy = (F::load(p.v[2][c.ky]) - r.oy) - r.sy * cz0;
+    const F U = cx * by - cy * bx;
+    const F V = ax * cy - ay * cx;
+    const F W = bx * ay - by * ax;
+    const F S = max(max(abs(ax) + abs(ay), abs(bx) + abs(by)), abs(cx) + abs(cy));
+    const F Z = max(max(abs(az0), abs(bz0)), abs(cz0));
+    const F B = S * (F::broadcast(14.0f * 0x1p-24f) * S + F::broadcast(32.0f * 0x1p-24f) * Z) +
+                F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-119f) * (F::broadcast(1.0f) + S + Z);
+    const F nB = F::broadcast(0.0f) - B;
+    const unsigned miss = ((U > B) | (V > B) | (W > B)) & ((U < nB) | (V < nB) | (W < nB));
+    unsigned open = filled & ~miss;
+    if (open == 0) return -1;
+    alignas(16) float u[kPacketWidth], v[kPacketWidth], w[kPacketWidth], b[kPacketWidth], za[kPacketWidth],
+        zb[kPacketWidth], zc[kPacketWidth];
+    U.store(u), V.store(v), W.store(w), B.store(b), az0.store(za), bz0.store(zb), cz0.store(zc);
+    int last = -1;
+    for (; open != 0; open &= open - 1) {
+      const int i = std::countr_zero(open);
+      if (c.has && c.prim == p.prim[i]) continue;
+      if (CertifiedKernel::decide_triangle(c, p.prim[i], p.vertex(i, 0), p.vertex(i, 1), p.vertex(i, 2), u[i], v[i], w[i],
+                                           b[i], za[i], zb[i], zc[i], hit)) {
+        last = i;
+        if constexpr (kAnyHit) return i;
+      }
+    }
+    return last;
   }
 };
 

@@ -34,6 +34,7 @@ struct Float<4> {
     return {_mm_sub_ps(_mm_mul_ps(a.v, b.v), c.v)};
 #endif
   }
+  friend Float abs(Float a) { return {_mm_andnot_ps(_mm_set1_ps(-0.0f), a.v)}; }
   /// Lane masks as bits (bit i = lane i).
   friend unsigned operator<=(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(a.v, b.v))); }
   friend unsigned operator<(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmplt_ps(a.v, b.v))); }

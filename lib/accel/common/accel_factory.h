@@ -3,34 +3,72 @@
 /// e.g. `embree:quality=high` or `brute:kernel=mt`. Unknown names and unknown or malformed
 /// parameters throw InputError listing the valid ones. Every accelerator registered here is run
 /// by the oracle test suite (tests/test_oracle.cpp) on every scene and ray kind it lists.
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "accel/common/hit_comparison.h"
+#include "accel/common/kernel_choice.h"
+#include "accel/exact/contact_classes.h"
 #include "geometry/spec_string.h"
 #include "scene/primitive.h"
 #include "scene/scene.h"
 
 namespace raylab {
 
-/// How closely an accelerator agrees with the exact oracle, in the sense of compare_hits
-/// (hit_comparison.h): the largest fraction of rays that may mismatch, per kind of ray.
-///
-/// Rays aimed at edges and vertices (`edges:`, `vertices:`) are where float methods fail. On a
-/// closed mesh such a ray crosses the surface, so a watertight method must agree exactly. On an
-/// open mesh (a boundary edge, a soup, a degenerate triangle) it grazes the surface at the
-/// feature: the exact answer there turns on the last bit of the ray, and no float kernel,
-/// watertight or not, can follow it; only the exact kernel states 0 there.
-struct AccuracyBound {
-  double max_mismatch_rate_closed_features = 0.0;  ///< feature-aimed rays on closed meshes
-  double max_mismatch_rate_open_features = 0.0;    ///< feature-aimed rays on open meshes
-  double max_mismatch_rate_other = 0.0;            ///< every other ray kind
-  std::string statement;                           ///< one sentence for listings and the report
+/// The classes an accuracy bound is stated for, from the exact oracle's classification of each
+/// ray (accel/exact/contact_classes.h): ill-conditioned rays (of any contact class) first, then
+/// by contact class; well-conditioned rays without a contact count with the crossing ones (a
+/// float method decides both by the same rounding-free margin).
+enum class RayBucket : std::uint8_t { crossing, touching, on_surface, ill_conditioned };
+inline constexpr int kRayBuckets = 4;
 
-  /// The bound for rays of `ray_spec` on a scene that is (or is not) closed.
-  double max_mismatch_rate(const std::string& ray_spec, bool scene_closed) const;
+RayBucket ray_bucket(const RayContact& c);
+/// "crossing", "touching", "on_surface", "ill_conditioned".
+const char* ray_bucket_name(RayBucket b);
+
+/// How closely an accelerator agrees with the exact oracle: the largest fraction of the rays of
+/// each bucket that may mismatch, in the sense of compare_hits (hit_comparison.h), or, for
+/// `exact` methods, of compare_hits_exact (the same primitive, or one whose exact t equals the
+/// oracle's: no tolerance).
+///
+/// A watertight float kernel decides every well-conditioned crossing exactly, at shared edges
+/// and vertices of closed and open meshes alike. A touching contact (a silhouette vertex or
+/// edge, a boundary edge, a ray in a face's plane), a ray starting on a surface, and any
+/// ill-conditioned ray turn on the last bit of the ray: no float kernel can follow them, so float
+/// methods claim nothing there (1.0) and the report measures them. Methods that are not
+/// watertight also fail on crossings through shared edges and vertices, mostly on the rays aimed
+/// at them (`edges:`, `vertices:`: the feature bound) and rarely elsewhere.
+struct AccuracyBound {
+  double crossing_features = 0.0;  ///< well-conditioned crossing/no-contact rays of feature-aimed kinds
+  double crossing_other = 0.0;     ///< well-conditioned crossing/no-contact rays of every other kind
+  double touching = 0.0;
+  double on_surface = 0.0;
+  double ill_conditioned = 0.0;
+  bool exact = false;     ///< held to the exact rule (compare_hits_exact) in every bucket
+  std::string statement;  ///< one sentence per class for listings and the report
+
+  double max_mismatch_rate(RayBucket bucket, bool feature_rays) const;
 };
+
+/// The mismatches `bound` allows among `rays` rays of bucket `b`.
+std::size_t allowed_mismatches(const AccuracyBound& bound, RayBucket b, bool feature_rays, std::size_t rays);
+/// Whether `c` (compared with classes) stays within `bound` in every bucket; otherwise, in
+/// `why`, one clause per bucket it exceeds.
+bool within_bound(const AccuracyBound& bound, const HitComparison& c, bool feature_rays, std::string* why = nullptr);
+
+/// The bound of a float method: the given rates on well-conditioned crossings of feature-aimed and
+/// other ray kinds, no claim (1.0) on touching, on-surface and ill-conditioned rays.
+AccuracyBound float_accuracy(double crossing_features, double crossing_other, std::string statement);
+/// The bound of a watertight float kernel with conservative traversal; `how` names them, e.g.
+/// "watertight kernel, conservative placement and traversal".
+AccuracyBound watertight_accuracy(const std::string& how);
+/// The bound of the exact and certified kernels: 0 everywhere, by the exact rule.
+AccuracyBound exact_accuracy(const std::string& how);
+/// watertight_accuracy(how) or, for kernel=certified, exact_accuracy of the certified kernel.
+AccuracyBound kernel_accuracy(KernelChoice kernel, const std::string& how);
 
 struct AccelKind {
   std::string name;
@@ -53,6 +91,14 @@ struct AccelKind {
 /// (require_valid_instances: a singular or non-finite transform, a missing or nested base).
 std::unique_ptr<Aggregate> make_instanced_aggregate(
     const Scene& scene, const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make);
+
+/// For an instanced scene and an accelerator with kernel `kernel`: make_instanced_aggregate, or
+/// with kernel=certified make_over_flattened_instances (exact_oracle.h): the certified answer is
+/// the exact answer on the flat copy of the scene, the geometry the oracle answers for, which a
+/// ray transformed into an instance's frame in float does not see exactly.
+std::unique_ptr<Aggregate> make_instanced_for_kernel(
+    KernelChoice kernel, const Scene& scene,
+    const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make);
 
 /// Every accelerator the lab knows, in listing order: the built-in kinds of accel_factory.cpp,
 /// then the registered ones by `order`.

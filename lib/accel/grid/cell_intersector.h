@@ -1,7 +1,7 @@
 #pragma once
 /// The per-ray work inside the cells of a grid, shared by the uniform and the nested grid:
-/// offering a cell's primitives to the watertight kernel, accepting hits by the cell's
-/// t-interval, and the mailbox.
+/// offering a cell's primitives to the kernel (watertight or certified), accepting hits by the
+/// cell's t-interval, and the mailbox.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +11,7 @@
 #include "accel/grid/grid_config.h"
 #include "accel/grid/grid_geometry.h"
 #include "accel/grid/mailbox.h"
+#include "geometry/certified_kernel.h"
 #include "geometry/triangle_kernels.h"
 #include "scene/scene_primitives.h"
 
@@ -29,17 +30,33 @@ struct NoMailbox {};
 /// Offers cell reference `ref` to the kernel: a local id of `tris` when `tris` holds triangles
 /// (cell_triangles.h), else a primitive id of `scene`. On a hit closer than the context's closest,
 /// writes `hit` with the scene's primitive id.
-template <class Counters>
+template <class Kernel, class Counters>
 inline bool intersect_cell_ref(const Scene& scene, const CellTriangles& tris, std::uint32_t ref,
-                               WatertightKernel::Context& ctx, Hit& hit, Counters& counters) {
-  if (tris.tris.empty()) return intersect_scene_primitive<WatertightKernel>(scene, ref, ctx, hit, counters);
+                               typename Kernel::Context& ctx, Hit& hit, Counters& counters) {
+  if (tris.tris.empty()) return intersect_scene_primitive<Kernel>(scene, ref, ctx, hit, counters);
   counters.prim_test();
   const CellTriangles::Triangle& t = tris.tris[ref];
   TriangleHit th;
-  if (!WatertightKernel::intersect(ctx, ref, t.v0, t.v1, t.v2, th)) return false;
+  if (!Kernel::intersect(ctx, ref, t.v0, t.v1, t.v2, th)) return false;
   counters.prim_hit();
   set_scene_hit(hit, th, tris.prim_of[ref]);
   return true;
+}
+
+/// Every primitive of `scene` offered to the certified kernel: the grids' path for a ray whose
+/// 3D-DDA would leave the placement margin (a ray from far outside the scene). True on a hit
+/// (with kAnyHit, at the first).
+template <bool kAnyHit, class Counters>
+inline bool certified_over_all_primitives(const Scene& scene, const Ray& ray, Hit& hit, Counters& counters) {
+  CertifiedKernel::Context ctx = CertifiedKernel::prepare(ray);
+  bool found = false;
+  counters.leaf();
+  for (unsigned prim = 0, n = static_cast<unsigned>(scene.primitive_count()); prim < n; ++prim)
+    if (intersect_scene_primitive<CertifiedKernel>(scene, prim, ctx, hit, counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+  return found;
 }
 
 /// Requests the cache lines of the copied triangles of references [begin, end) before they are
@@ -58,9 +75,10 @@ inline std::uint32_t cell_ref_prim(const CellTriangles& tris, std::uint32_t ref)
   return tris.tris.empty() ? ref : tris.prim_of[ref];
 }
 
-/// Closest-hit state of one ray in a grid.
-template <class Counters, bool kMailbox>
+/// Closest-hit state of one ray in a grid (the watertight kernel).
+template <class Kernel, class Counters, bool kMailbox>
 struct ClosestHitInCells {
+  static_assert(std::is_same_v<Kernel, WatertightKernel>);
   const Scene& scene;
   const CellTriangles& tris;
   WatertightKernel::Context ctx;
@@ -97,7 +115,7 @@ struct ClosestHitInCells {
       }
       ctx.tmax = best;
       Hit h;
-      if (intersect_cell_ref(scene, tris, prim, ctx, h, counters)) {
+      if (intersect_cell_ref<WatertightKernel>(scene, tris, prim, ctx, h, counters)) {
         if (h.t <= limit) {
           best = h.t;
           hit = h;
@@ -114,17 +132,55 @@ struct ClosestHitInCells {
   }
 };
 
-/// Any-hit state of one ray in a grid: any hit in [tmin, tmax] ends the ray, wherever it lies.
+/// Closest-hit state of one ray in a grid with the certified kernel. The kernel keeps the first
+/// hit over every cell offered so far, so hits need no acceptance test of their own and the
+/// mailbox only skips primitives already offered. The walk stops after a cell whose interval
+/// ends at or after the certified upper bound of the first hit's exact t: every t' below it lies
+/// in the interval of a visited cell, whose primitives include every one the exact ray meets at
+/// t' as long as the 3D-DDA stays within the placement margin of its cells
+/// (dda_within_margin, grid_geometry.h; the grids check it per ray).
 template <class Counters, bool kMailbox>
+struct ClosestHitInCells<CertifiedKernel, Counters, kMailbox> {
+  const Scene& scene;
+  const CellTriangles& tris;
+  CertifiedKernel::Context ctx;
+  Counters& counters;
+  Hit hit;
+  bool found = false;
+  [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
+
+  ClosestHitInCells(const Scene& s, const CellTriangles& ct, const Ray& ray, GridAcceptance, float, Counters& c)
+      : scene(s), tris(ct), ctx(CertifiedKernel::prepare(ray)), counters(c) {}
+
+  bool leaf(const std::uint32_t* begin, const std::uint32_t* end, float /*t_enter*/, float t_exit) {
+    counters.leaf();
+    prefetch_cell_triangles(tris, begin, end);
+    for (const std::uint32_t* p = begin; p != end; ++p) {
+      if constexpr (kMailbox) {
+        if (mailbox.find(*p)) {
+          counters.mailbox_skip();
+          continue;
+        }
+        mailbox.store_miss(*p);
+      }
+      found |= intersect_cell_ref<CertifiedKernel>(scene, tris, *p, ctx, hit, counters);
+    }
+    return found && CertifiedKernel::best_upper(ctx) <= t_exit;
+  }
+};
+
+/// Any-hit state of one ray in a grid: any hit in [tmin, tmax] ends the ray, wherever it lies.
+template <class Kernel, class Counters, bool kMailbox>
 struct AnyHitInCells {
   const Scene& scene;
   const CellTriangles& tris;
-  WatertightKernel::Context ctx;
+  typename Kernel::Context ctx;
   Counters& counters;
   [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
 
-  AnyHitInCells(const Scene& s, const CellTriangles& ct, const Ray& closed_ray, Counters& c)
-      : scene(s), tris(ct), ctx(WatertightKernel::prepare(closed_ray)), counters(c) {}
+  /// `ray`: for the watertight kernel, closed_for_any_hit of the query.
+  AnyHitInCells(const Scene& s, const CellTriangles& ct, const Ray& ray, Counters& c)
+      : scene(s), tris(ct), ctx(Kernel::prepare(ray)), counters(c) {}
 
   bool leaf(const std::uint32_t* begin, const std::uint32_t* end, float, float) {
     counters.leaf();
@@ -137,7 +193,7 @@ struct AnyHitInCells {
           continue;
         }
       }
-      if (intersect_cell_ref(scene, tris, *p, ctx, h, counters)) return true;
+      if (intersect_cell_ref<Kernel>(scene, tris, *p, ctx, h, counters)) return true;
       if constexpr (kMailbox) mailbox.store_miss(*p);
     }
     return false;

@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 
+#include "accel/common/kernel_choice.h"
 #include "geometry/bounds.h"
 
 namespace raylab {
@@ -29,6 +30,8 @@ struct GridConfig {
   bool mailbox = true;
   /// Cap on nx·ny·nz; the density is lowered uniformly to meet it (default 2^27 cells, 512 MiB of offsets).
   std::int64_t max_cells = std::int64_t(1) << 27;
+  /// certified requires in-cell acceptance (grid_spec.cpp).
+  KernelChoice kernel = KernelChoice::watertight;
 };
 
 /// The lecture's resolution heuristic for `n` objects in `box`: the largest axis gets

@@ -58,6 +58,23 @@ inline float grid_margin(const Bounds3f& b) {
   return std::max(kGridMarginScale * (mag + max_component(b.diagonal())), 1e-30f);
 }
 
+/// Whether the float 3D-DDA (grid_traversal.h) of `ray` through a grid with box `box` and
+/// placement margin `margin`, over an interval ending at t1, keeps every point o + t·d within
+/// the margin of the cell whose interval holds t, so that the cell's list (placed on cells
+/// widened by the margin) holds every primitive through that point. Rounding moves those points
+/// by at most 32u·(|o|∞ + |t1|·|d|∞ + |box|∞), u = 2^-24: the start cell (o + d·t0 and its
+/// cell index: 2u|d·t0| + u|o| + about 10u|box|), each crossing t* = (plane - o)·(1/d) (γ3 relative,
+/// 3u(|plane| + |o|) along its axis), and the two ways planes are computed (cell_of for bbox
+/// placement, plane() for exact placement and the DDA: about 10u|box|). The test asks for
+/// twice that, half the margin, which leaves room for the nested grids' clipped intervals.
+/// False for a ray from far outside (|o| much larger than the scene): grids then offer it every
+/// primitive (certified_over_all_primitives).
+inline bool dda_within_margin(const Ray& ray, float t1, const Bounds3f& box, float margin) {
+  const float mag = std::max(max_component(abs(box.lo)), max_component(abs(box.hi)));
+  const float reach = max_component(abs(ray.org)) + std::abs(t1) * max_component(abs(ray.dir)) + mag;
+  return 0x1p-18f * reach <= margin;
+}
+
 inline Bounds3f widened(Bounds3f b, float margin) {
   b.lo = b.lo - Vec3f(margin);
   b.hi = b.hi + Vec3f(margin);

@@ -1,5 +1,7 @@
 #include "accel/grid/grid_spec.h"
 
+#include "geometry/input_error.h"
+
 namespace raylab {
 
 std::vector<ParamDoc> grid_cell_params() {
@@ -9,6 +11,7 @@ std::vector<ParamDoc> grid_cell_params() {
       {"accept", "in-cell", "in-cell (hit must lie in the cell's t-interval) | first (the lecture's mistake)"},
       {"mailbox", "on", "per-ray mailbox: on | off"},
       {"max_cells", "134217728", "cap on the cells of one grid (d is lowered to meet it), in [1, 2^30]"},
+      kernel_param_doc(),
   };
 }
 
@@ -20,17 +23,18 @@ GridConfig read_grid_config(SpecReader& r) {
       r.get_choice("accept", "in-cell", {"in-cell", "first"}) == "first" ? GridAcceptance::first : GridAcceptance::in_cell;
   c.mailbox = r.get_bool("mailbox", true);
   c.max_cells = r.get_int("max_cells", std::int64_t(1) << 27, 1, std::int64_t(1) << 30);
+  c.kernel = read_kernel_choice(r);
+  if (c.kernel == KernelChoice::certified && c.acceptance == GridAcceptance::first)
+    throw InputError("accelerator '" + r.spec().text + "': kernel=certified needs in-cell acceptance (accept=in-cell)");
   return c;
 }
 
 AccuracyBound grid_accuracy(const GridConfig& c) {
   if (c.acceptance == GridAcceptance::first)
-    return {1.0, 1.0, 1.0,
-            "accept=first is the lecture's mistake: a hit found in a cell may lie beyond it, behind a closer hit in a "
-            "later cell; no agreement is claimed"};
-  return {0.0, 0.5, 0.0,
-          "exact agreement (watertight kernel, in-cell acceptance), except on rays grazing open meshes exactly at an "
-          "edge or vertex (bound there: 50%)"};
+    return float_accuracy(1.0, 1.0,
+                          "accept=first is the lecture's mistake: a hit found in a cell may lie beyond it, behind a "
+                          "closer hit in a later cell; no agreement is claimed");
+  return kernel_accuracy(c.kernel, "in-cell acceptance");
 }
 
 }  // namespace raylab

@@ -13,7 +13,7 @@ std::vector<ParamDoc> grid_cell_params();
 /// Reads the parameters of grid_cell_params() (InputError on bad values).
 GridConfig read_grid_config(SpecReader& reader);
 
-/// In-cell acceptance with the watertight kernel agrees with the oracle as brute force does;
+/// In-cell acceptance agrees with the oracle as brute force with the same kernel does;
 /// accept=first is the lecture's mistake and claims nothing.
 AccuracyBound grid_accuracy(const GridConfig& config);
 

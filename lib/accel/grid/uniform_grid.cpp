@@ -9,6 +9,7 @@ UniformGrid::UniformGrid(std::shared_ptr<const Scene> scene, const GridConfig& c
     : scene_(std::move(scene)), config_(config), bounds_(scene_->bounds()) {
   if (scene_->instanced()) throw InputError("grid: scene '" + scene_->spec + "' is instanced twice over");
   const float margin = grid_margin(bounds_);
+  margin_ = margin;
   const Bounds3f box = widened(bounds_, margin);
   grid_ = GridGeometry(box, grid_resolution(box, static_cast<double>(scene_->primitive_count()), config_.density,
                                             config_.max_cells));

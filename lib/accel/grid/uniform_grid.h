@@ -2,7 +2,9 @@
 /// `grid`: the lecture's uniform grid. Build: the scene's box, the resolution max(nx, ny, nz) =
 /// d·∛n (grid_config.h), primitives placed in cells (grid_placement.h) and stored as CSR.
 /// Traversal: the 3D-DDA of Amanatides and Woo 1987 (grid_traversal.h) with in-cell acceptance
-/// and a per-ray mailbox (cell_intersector.h).
+/// and a per-ray mailbox (cell_intersector.h); with kernel=certified, the certified acceptance
+/// of cell_intersector.h and, for a ray whose DDA could leave the placement margin
+/// (dda_within_margin), every primitive.
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -36,41 +38,59 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
 
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
-    return config_.mailbox ? closest<Counters, true>(ray, hit, counters) : closest<Counters, false>(ray, hit, counters);
+    if (config_.kernel == KernelChoice::certified)
+      return config_.mailbox ? closest<CertifiedKernel, Counters, true>(ray, hit, counters)
+                             : closest<CertifiedKernel, Counters, false>(ray, hit, counters);
+    return config_.mailbox ? closest<WatertightKernel, Counters, true>(ray, hit, counters)
+                           : closest<WatertightKernel, Counters, false>(ray, hit, counters);
   }
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    return config_.mailbox ? any<Counters, true>(ray, counters) : any<Counters, false>(ray, counters);
+    if (config_.kernel == KernelChoice::certified)
+      return config_.mailbox ? any<CertifiedKernel, Counters, true>(ray, counters)
+                             : any<CertifiedKernel, Counters, false>(ray, counters);
+    return config_.mailbox ? any<WatertightKernel, Counters, true>(ray, counters)
+                           : any<WatertightKernel, Counters, false>(ray, counters);
   }
 
  private:
-  template <class Counters, bool kMailbox>
+  template <class Kernel, class Counters, bool kMailbox>
   bool closest(Ray& ray, Hit& hit, Counters& counters) const {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
-    if (!intersect_box(grid_.box, ray, inv, ray.tmin, ray.tmax, t0, t1)) return false;
-    ClosestHitInCells<Counters, kMailbox> state(*scene_, tris_, ray, config_.acceptance, cell_widening(ray, extent_), counters);
-    const std::uint32_t* refs = lists_.refs.data();
-    const std::uint32_t* offsets = lists_.offsets.data();
-    grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
-      counters.node();
-      const std::uint32_t b = offsets[c], e = offsets[c + 1];
-      return b != e && state.leaf(refs + b, refs + e, enter, exit);
-    });
-    if (!state.found) return false;
-    hit = state.hit;
-    ray.tmax = hit.t;
-    return true;
+    if (!intersect_box(grid_.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    bool found;
+    if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(ray, t1, grid_.box, margin_)) {
+      ClosestHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, config_.acceptance,
+                                                          cell_widening(ray, extent_), counters);
+      const std::uint32_t* refs = lists_.refs.data();
+      const std::uint32_t* offsets = lists_.offsets.data();
+      grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
+        counters.node();
+        const std::uint32_t b = offsets[c], e = offsets[c + 1];
+        return b != e && state.leaf(refs + b, refs + e, enter, exit);
+      });
+      found = state.found;
+      if (found) hit = state.hit;
+    } else {
+      found = certified_over_all_primitives<false>(*scene_, ray, hit, counters);
+    }
+    if (found) ray.tmax = hit.t;
+    return found;
   }
 
-  template <class Counters, bool kMailbox>
-  bool any(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
+  template <class Kernel, class Counters, bool kMailbox>
+  bool any(const Ray& query, Counters& counters) const {
+    const Ray ray = any_hit_ray<Kernel>(query);
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
-    if (!intersect_box(grid_.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;
-    AnyHitInCells<Counters, kMailbox> state(*scene_, tris_, closed, counters);
+    if (!intersect_box(grid_.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(ray, t1, grid_.box, margin_)) {
+      Hit hit;
+      return certified_over_all_primitives<true>(*scene_, ray, hit, counters);
+    }
+    AnyHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, counters);
     const std::uint32_t* refs = lists_.refs.data();
     const std::uint32_t* offsets = lists_.offsets.data();
     return grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
@@ -84,6 +104,7 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   GridConfig config_;
   Bounds3f bounds_;
   GridGeometry grid_;
+  float margin_ = 0.0f;  ///< the placement margin (grid_margin)
   float extent_ = 0.0f;  ///< sum of the grid's extents, the D of cell_widening
   CellLists lists_;
   CellTriangles tris_;

@@ -42,7 +42,8 @@ std::vector<ParamDoc> kdtree_params() {
           {"empty_bonus", "0.2", "SAH empty-space bonus in [0,1)"},
           {"max_depth", "0", "safety depth limit; 0 = 8 + 1.3 log2 N, at most 64"},
           {"leaf_size", "4", "midpoint/median: largest leaf"},
-          {"mailbox", "off", "skip primitives a ray already tested"}};
+          {"mailbox", "off", "skip primitives a ray already tested"},
+          kernel_param_doc()};
 }
 
 }  // namespace
@@ -59,6 +60,7 @@ KdTreeConfig read_kdtree_config(SpecReader& r) {
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 64));
   c.leaf_size = static_cast<int>(r.get_int("leaf_size", 4, 1, 1 << 20));
   c.mailbox = r.get_bool("mailbox", false);
+  c.kernel = read_kernel_choice(r);
   return c;
 }
 
@@ -66,7 +68,7 @@ namespace {
 
 std::unique_ptr<Aggregate> make_kdtree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config) {
   if (scene->instanced())
-    return make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> base) {
+    return make_instanced_for_kernel(config.kernel, *scene, [&](std::shared_ptr<const Scene> base) {
       return make_kdtree(std::move(base), config);
     });
   return std::make_unique<KdTree>(std::move(scene), config);
@@ -80,13 +82,11 @@ AccelKind make_kdtree_kind() {
           kdtree_params(),
           [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_kdtree(std::move(scene), read_kdtree_config(r)); },
           [](SpecReader& r) -> AccuracyBound {
-            read_kdtree_config(r);
-            return {0.0, 0.5, 0.0,
-                    "exact agreement (watertight kernel, conservative placement and traversal), except on rays "
-                    "grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
+            return kernel_accuracy(read_kdtree_config(r).kernel, "conservative placement and traversal");
           },
           {"builder=midpoint,traversal=recursive", "builder=median,clip=bbox,mailbox=on", "sweep=sort,clip=none",
-           "clip=bbox,traversal=recursive,mailbox=on", "cost=default"}};
+           "clip=bbox,traversal=recursive,mailbox=on", "cost=default", "kernel=certified",
+           "kernel=certified,traversal=recursive,clip=bbox,mailbox=on"}};
 }
 
 namespace {

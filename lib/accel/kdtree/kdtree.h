@@ -31,18 +31,22 @@ class KdTree final : public AggregateBase<KdTree> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
-    return dispatch<true>(closed, hit, counters);
+    return dispatch<true>(ray, hit, counters);
   }
 
  private:
   template <bool kAnyHit, class Counters>
   bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
+    if (config_.kernel == KernelChoice::certified) return traverse<CertifiedKernel, kAnyHit>(ray, hit, counters);
+    return traverse<WatertightKernel, kAnyHit>(kAnyHit ? closed_for_any_hit(ray) : ray, hit, counters);
+  }
+
+  template <class K, bool kAnyHit, class Counters>
+  bool traverse(const Ray& ray, Hit& hit, Counters& counters) const {
     const KdTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds,
                           tris_.empty() ? nullptr : tris_.data(), lines_.empty() ? nullptr : lines_.front().node,
                           packets_.empty() ? nullptr : packets_.data()};
-    using K = WatertightKernel;
     if (config_.traversal == KdTraversal::stack)
       return config_.mailbox ? kd_traverse_lines<K, kAnyHit, true>(view, ray, hit, counters)
                              : kd_traverse_lines<K, kAnyHit, false>(view, ray, hit, counters);

@@ -2,6 +2,7 @@
 /// Parameters of the kd-tree (`kdtree:key=value,...`); the factory fills them and rejects others.
 #include <cstdint>
 
+#include "accel/common/kernel_choice.h"
 #include "accel/kdtree/split_clipping.h"
 #include "accel/kdtree/sah_cost.h"
 
@@ -35,6 +36,7 @@ struct KdTreeConfig {
   int leaf_size = 4;
   /// Remember the last primitives tested by a ray and skip repeats (Amanatides and Woo 1987).
   bool mailbox = false;
+  KernelChoice kernel = KernelChoice::watertight;
 };
 
 /// The depth limit actually used for `n` primitives.

@@ -18,11 +18,16 @@
 /// t*·(1 ∓ kKdPlaneSlack) maps ±inf to itself and NaN to NaN.
 /// A hit ends traversal only once it lies inside the current cell's interval: the far child is
 /// skipped when the closest hit so far is before the far child's entry.
+/// With the certified kernel the same comparisons are conservative for the exact ray: the root
+/// interval is taken on [tmin, initial_closest] (kernel_choice.h), Kernel::closest() is an upper
+/// bound of the exact first hit raised past the rounding of any entry t, and the widened t* has
+/// a relative slack (1e-6) above its rounding error (γ3 < 2^-21).
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "accel/bvh/packed_triangles_simd.h"
+#include "accel/common/kernel_choice.h"
 #include "accel/kdtree/kdtree_node.h"
 #include "accel/kdtree/kdtree_node_lines.h"
 #include "accel/kdtree/kdtree_triangle_soup.h"
@@ -187,7 +192,7 @@ template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
   float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
   auto ctx = Kernel::prepare(ray);
   const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
   KdMailbox<kMailbox> mailbox;
@@ -283,7 +288,7 @@ template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool kd_traverse_recursive(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
   float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, ray, inv, tmin, tmax)) return false;
+  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
   KdRecursiveTraversal<Kernel, kAnyHit, kMailbox, Counters> t{tree, ray, inv, Kernel::prepare(ray), hit, counters, {}};
   t.visit(0, tmin, tmax);
   return t.found;

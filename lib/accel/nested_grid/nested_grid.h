@@ -49,12 +49,19 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
 
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
-    return config_.cells.mailbox ? closest<Counters, true>(ray, hit, counters)
-                                 : closest<Counters, false>(ray, hit, counters);
+    if (config_.cells.kernel == KernelChoice::certified)
+      return config_.cells.mailbox ? closest<CertifiedKernel, Counters, true>(ray, hit, counters)
+                                   : closest<CertifiedKernel, Counters, false>(ray, hit, counters);
+    return config_.cells.mailbox ? closest<WatertightKernel, Counters, true>(ray, hit, counters)
+                                 : closest<WatertightKernel, Counters, false>(ray, hit, counters);
   }
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    return config_.cells.mailbox ? any<Counters, true>(ray, counters) : any<Counters, false>(ray, counters);
+    if (config_.cells.kernel == KernelChoice::certified)
+      return config_.cells.mailbox ? any<CertifiedKernel, Counters, true>(ray, counters)
+                                   : any<CertifiedKernel, Counters, false>(ray, counters);
+    return config_.cells.mailbox ? any<WatertightKernel, Counters, true>(ray, counters)
+                                 : any<WatertightKernel, Counters, false>(ray, counters);
   }
 
  private:
@@ -89,28 +96,37 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     });
   }
 
-  template <class Counters, bool kMailbox>
+  template <class Kernel, class Counters, bool kMailbox>
   bool closest(Ray& ray, Hit& hit, Counters& counters) const {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
-    if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, ray.tmax, t0, t1)) return false;
-    ClosestHitInCells<Counters, kMailbox> state(*scene_, tris_, ray, config_.cells.acceptance, cell_widening(ray, extent_),
-                                                counters);
-    traverse(0, ray, inv, t0, t1, state, counters);
-    if (!state.found) return false;
-    hit = state.hit;
-    ray.tmax = hit.t;
-    return true;
+    if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    bool found;
+    if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(ray, t1, levels_[0].geom.box, margin_)) {
+      ClosestHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, config_.cells.acceptance,
+                                                          cell_widening(ray, extent_), counters);
+      traverse(0, ray, inv, t0, t1, state, counters);
+      found = state.found;
+      if (found) hit = state.hit;
+    } else {
+      found = certified_over_all_primitives<false>(*scene_, ray, hit, counters);
+    }
+    if (found) ray.tmax = hit.t;
+    return found;
   }
 
-  template <class Counters, bool kMailbox>
-  bool any(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
+  template <class Kernel, class Counters, bool kMailbox>
+  bool any(const Ray& query, Counters& counters) const {
+    const Ray ray = any_hit_ray<Kernel>(query);
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
-    if (!intersect_box(levels_[0].geom.box, closed, inv, closed.tmin, closed.tmax, t0, t1)) return false;
-    AnyHitInCells<Counters, kMailbox> state(*scene_, tris_, closed, counters);
-    return traverse(0, closed, inv, t0, t1, state, counters);
+    if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(ray, t1, levels_[0].geom.box, margin_)) {
+      Hit hit;
+      return certified_over_all_primitives<true>(*scene_, ray, hit, counters);
+    }
+    AnyHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, counters);
+    return traverse(0, ray, inv, t0, t1, state, counters);
   }
 
   std::shared_ptr<const Scene> scene_;

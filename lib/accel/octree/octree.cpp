@@ -27,6 +27,7 @@ OctreeConfig read_octree_config(SpecReader& r) {
   c.mailbox = r.get_bool("mailbox", false);
   c.traversal = r.get_choice("traversal", "revelles", {"revelles", "kd"}) == "kd" ? OctreeTraversal::kd
                                                                                  : OctreeTraversal::revelles;
+  c.kernel = read_kernel_choice(r);
   return c;
 }
 
@@ -34,7 +35,7 @@ namespace {
 
 std::unique_ptr<Aggregate> make_octree(std::shared_ptr<const Scene> scene, const OctreeConfig& config) {
   if (scene->instanced())
-    return make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> base) {
+    return make_instanced_for_kernel(config.kernel, *scene, [&](std::shared_ptr<const Scene> base) {
       return make_octree(std::move(base), config);
     });
   return std::make_unique<Octree>(std::move(scene), config);
@@ -53,15 +54,14 @@ AccelKind make_octree_kind() {
            {"max_depth", "0", "safety depth limit; 0 = 3 + ceil(log8 N), at most 20"},
            {"mailbox", "off", "skip primitives a ray already tested"},
            {"traversal", "revelles",
-            "revelles (parametric, Revelles et al. 2000) | kd (centre planes as three kd-tree splits)"}},
+            "revelles (parametric, Revelles et al. 2000) | kd (centre planes as three kd-tree splits)"},
+           kernel_param_doc()},
           [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_octree(std::move(scene), read_octree_config(r)); },
           [](SpecReader& r) -> AccuracyBound {
-            read_octree_config(r);
-            return {0.0, 0.5, 0.0,
-                    "exact agreement (watertight kernel, conservative placement and traversal), except on rays "
-                    "grazing open meshes exactly at an edge or vertex (bound there: 50%)"};
+            return kernel_accuracy(read_octree_config(r).kernel, "conservative placement and traversal");
           },
-          {"clip=none", "clip=bbox,mailbox=on", "traversal=kd", "clip=none,traversal=kd,mailbox=on", "cost=default"}};
+          {"clip=none", "clip=bbox,mailbox=on", "traversal=kd", "clip=none,traversal=kd,mailbox=on", "cost=default",
+           "kernel=certified", "kernel=certified,traversal=kd,clip=bbox,mailbox=on"}};
 }
 
 namespace {

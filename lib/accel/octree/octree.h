@@ -29,16 +29,20 @@ class Octree final : public AggregateBase<Octree> {
 
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
-    const Ray closed = closed_for_any_hit(ray);
     Hit hit;
-    return dispatch<true>(closed, hit, counters);
+    return dispatch<true>(ray, hit, counters);
   }
 
  private:
   template <bool kAnyHit, class Counters>
   bool dispatch(const Ray& ray, Hit& hit, Counters& counters) const {
+    if (config_.kernel == KernelChoice::certified) return traverse<CertifiedKernel, kAnyHit>(ray, hit, counters);
+    return traverse<WatertightKernel, kAnyHit>(kAnyHit ? closed_for_any_hit(ray) : ray, hit, counters);
+  }
+
+  template <class K, bool kAnyHit, class Counters>
+  bool traverse(const Ray& ray, Hit& hit, Counters& counters) const {
     const OctreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
-    using K = WatertightKernel;
     if (config_.traversal == OctreeTraversal::revelles)
       return config_.mailbox ? octree_traverse_revelles<K, kAnyHit, true>(view, ray, hit, counters)
                              : octree_traverse_revelles<K, kAnyHit, false>(view, ray, hit, counters);

@@ -1,5 +1,6 @@
 #pragma once
 /// Parameters of the octree (`octree:key=value,...`).
+#include "accel/common/kernel_choice.h"
 #include "accel/kdtree/sah_cost.h"
 #include "accel/kdtree/split_clipping.h"
 
@@ -20,6 +21,7 @@ struct OctreeConfig {
   /// Remember the last primitives tested by a ray and skip repeats.
   bool mailbox = false;
   OctreeTraversal traversal = OctreeTraversal::revelles;
+  KernelChoice kernel = KernelChoice::watertight;
 };
 
 int octree_max_depth(const OctreeConfig& config, std::size_t n);

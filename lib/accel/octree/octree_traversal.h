@@ -37,7 +37,7 @@ template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
   float t0, t1;
-  if (!kd_root_interval(tree.bounds, ray, inv, t0, t1)) return false;
+  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, t0, t1)) return false;
   auto ctx = Kernel::prepare(ray);
   KdMailbox<kMailbox> mailbox;
   /// A node of the tree (level 0), or one of its half-, quarter- or eighth-cells selected by the
@@ -105,7 +105,7 @@ bool octree_traverse_revelles(const OctreeView& tree, const Ray& ray, Hit& hit, 
     return kAnyHit && in_leaf;
   };
   auto cut = [&] { return Kernel::closest(ctx); };
-  octree_walk_revelles(tree.nodes, tree.bounds, ray, leaf, cut, counters);
+  octree_walk_revelles(tree.nodes, tree.bounds, traversal_ray<Kernel>(ray), leaf, cut, counters);
   return found;
 }
 

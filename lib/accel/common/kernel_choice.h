@@ -1,0 +1,47 @@
+#pragma once
+/// The `kernel=watertight|certified` parameter of every accelerator that tests triangles or
+/// spheres (brute has its own, which also offers mt and exact).
+///
+///  - watertight: WatertightKernel (Woop, Benthin and Wald 2013), float, the default.
+///  - certified:  CertifiedKernel (geometry/certified_kernel.h): the float test with a forward
+///                error bound and an exact fallback, whose first hits equal the exact oracle's;
+///                traversal is then run conservatively (each accelerator states how).
+#include <string>
+#include <vector>
+
+#include "geometry/certified_kernel.h"
+#include "geometry/spec_string.h"
+
+namespace raylab {
+
+enum class KernelChoice { watertight, certified };
+
+inline ParamDoc kernel_param_doc() {
+  return {"kernel", "watertight",
+          "watertight (Woop et al. 2013, float) | certified (float with a forward error bound and an exact CGAL "
+          "fallback: the exact oracle's first hits)"};
+}
+
+inline KernelChoice read_kernel_choice(SpecReader& r) {
+  return r.get_choice("kernel", "watertight", {"watertight", "certified"}) == "certified" ? KernelChoice::certified
+                                                                                         : KernelChoice::watertight;
+}
+
+/// The closest-hit bound a traversal starts from: tmax, raised for the certified kernel as its
+/// closest() raises every bound (CertifiedKernel::reach_of), so that no box or plane entry
+/// computed within rounding of tmax is pruned.
+template <class Kernel>
+inline float initial_closest(const Ray& ray) {
+  if constexpr (std::is_same_v<Kernel, CertifiedKernel>) return CertifiedKernel::reach_of(ray.tmax);
+  else return ray.tmax;
+}
+
+/// The ray a traversal tests its root box with: tmax raised as initial_closest().
+template <class Kernel>
+inline Ray traversal_ray(const Ray& ray) {
+  Ray r = ray;
+  r.tmax = initial_closest<Kernel>(ray);
+  return r;
+}
+
+}  // namespace raylab

@@ -1,0 +1,194 @@
+// The certified kernel (geometry/certified_kernel.h) against the exact kernel and the exact
+// oracle: rays built so that the float decision is wrong (a touching ray the watertight kernel
+// misses, two hits whose float order is wrong) are decided right, random and adversarial
+// configurations agree with ExactFirstHit, and the exact path is taken only where the float
+// filter cannot decide.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
+#include "geometry/certified_kernel.h"
+#include "geometry/exact_contact.h"
+#include "geometry/float_mode.h"
+#include "geometry/input_error.h"
+#include "rays/feature_rays.h"
+#include "rays/random.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+struct Tri {
+  Vec3f a, b, c;
+};
+
+/// The first hit among `tris` by `Kernel`: its index, or -1.
+template <class Kernel>
+int first_hit(const Ray& ray, const std::vector<Tri>& tris) {
+  auto ctx = Kernel::prepare(ray);
+  int best = -1;
+  TriangleHit h;
+  for (std::size_t i = 0; i < tris.size(); ++i)
+    if (Kernel::intersect(ctx, static_cast<unsigned>(i), tris[i].a, tris[i].b, tris[i].c, h)) best = static_cast<int>(i);
+  return best;
+}
+
+/// Whether triangle i's first contact with `ray` is exactly at the exact first hit among `tris`
+/// (i = -1: no triangle is met).
+bool exactly_first(const Ray& ray, const std::vector<Tri>& tris, int i) {
+  ExactFirstHit all(ray);
+  for (std::size_t k = 0; k < tris.size(); ++k) all.offer_triangle(static_cast<unsigned>(k), tris[k].a, tris[k].b, tris[k].c);
+  if (i < 0) return !all.has_hit();
+  ExactFirstHit one(ray);
+  if (!all.has_hit() || !one.offer_triangle(0, tris[i].a, tris[i].b, tris[i].c)) return false;
+  return one.compare_time(all) == 0;
+}
+
+// A ray exactly through a vertex of a closed mesh, outside the vertex's tangent cone, touches the
+// surface there: the exact answer is a hit at the vertex. The watertight kernel decides it by the
+// rounding of the shear (the vertex's sheared coordinates are not exactly 0) and misses some.
+TEST(CertifiedKernel, FindsTouchingRaysTheWatertightKernelMisses) {
+  const FloatModeScope ftz(true);
+  const auto scene = make_scene("sphere:n=2000");
+  const auto rays = touching_vertex_rays(scene->mesh, 400, 0.02, 7);
+  std::vector<Tri> tris;
+  for (std::size_t t = 0; t < scene->mesh.size(); ++t)
+    tris.push_back({scene->mesh.vertex(t, 0), scene->mesh.vertex(t, 1), scene->mesh.vertex(t, 2)});
+  std::size_t watertight_wrong = 0;
+  for (const Ray& ray : rays) {
+    ExactContactClassifier cls(ray);
+    for (const Tri& t : tris) cls.offer_triangle(t.a, t.b, t.c);
+    ASSERT_EQ(cls.contact(), Contact::touching);
+    const int certified = first_hit<CertifiedKernel>(ray, tris);
+    EXPECT_TRUE(exactly_first(ray, tris, certified)) << "certified kernel wrong on a touching ray";
+    watertight_wrong += !exactly_first(ray, tris, first_hit<WatertightKernel>(ray, tris));
+  }
+  EXPECT_GT(watertight_wrong, 0u) << "no touching ray fooled the watertight kernel: the test shows nothing";
+  std::cout << "[ touching ] watertight wrong on " << watertight_wrong << " of " << rays.size() << " rays, certified on 0\n";
+}
+
+// Two triangles cross the ray within a few float ulps of t of each other, tilted differently:
+// the float t of each is rounded independently, and for some rays the float order is the wrong
+// one. The certified kernel's t intervals overlap there, so it orders them exactly.
+TEST(CertifiedKernel, OrdersHitsWhoseFloatOrderIsWrong) {
+  const FloatModeScope ftz(true);
+  Rng rng(11);
+  std::size_t wrong_order = 0, cases = 0;
+  for (int k = 0; k < 20000 && wrong_order < 20; ++k) {
+    const Vec3d p(rng.uniform() * 100.0, rng.uniform() * 100.0, rng.uniform() * 100.0);
+    auto tilted = [&](double tilt) {
+      const Vec3d n = normalize(Vec3d(tilt, 0.3 * tilt, 1.0));
+      const Vec3d u = normalize(cross(n, Vec3d(1, 0, 0))), v = cross(n, u);
+      return Tri{Vec3f(p + u * 7.0), Vec3f(p - u * 3.0 + v * 6.0), Vec3f(p - u * 4.0 - v * 5.0)};
+    };
+    const std::vector<Tri> tris = {tilted(0.9 * rng.uniform()), tilted(-0.9 * rng.uniform())};
+    const Vec3d w = normalize(Vec3d(0.3 * rng.uniform(), 0.3 * rng.uniform(), -1.0));
+    const Vec3d target = p + Vec3d(rng.uniform() - 0.5, rng.uniform() - 0.5, 0.0) * 1e-3;
+    const Ray ray{Vec3f(target - w * 50.0), Vec3f(w), 0.0f, INFINITY};
+    const int watertight = first_hit<WatertightKernel>(ray, tris);
+    if (watertight < 0) continue;
+    ++cases;
+    EXPECT_TRUE(exactly_first(ray, tris, first_hit<CertifiedKernel>(ray, tris))) << "ray " << k;
+    wrong_order += !exactly_first(ray, tris, watertight);
+  }
+  EXPECT_GT(wrong_order, 0u) << "the float order was never wrong in " << cases << " cases: the test shows nothing";
+  std::cout << "[ order ] watertight took the farther hit on " << wrong_order << " of " << cases << " rays\n";
+}
+
+// Random triangles and rays, many aimed exactly at vertices and edges, in a tiny, a unit and a
+// huge coordinate range, with FTZ/DAZ on: the certified kernel's first hit is always the exact one.
+TEST(CertifiedKernel, AgreesWithTheExactFirstHitOnRandomAndFeatureAimedRays) {
+  const FloatModeScope ftz(true);
+  Rng rng(3);
+  std::size_t rays = 0, exact_paths = 0;
+  for (const double scale : {1e-30, 1e-6, 1.0, 1e6, 1e30}) {
+    for (int k = 0; k < 400; ++k) {
+      std::vector<Tri> tris;
+      const Vec3d offset = Vec3d(rng.uniform(), rng.uniform(), rng.uniform()) * (k % 3 == 0 ? 1e3 : 1.0);
+      auto point = [&] { return Vec3f((Vec3d(rng.uniform(), rng.uniform(), rng.uniform()) + offset) * scale); };
+      const Vec3f shared0 = point(), shared1 = point();
+      for (int t = 0; t < 6; ++t) tris.push_back({shared0, t % 2 ? shared1 : point(), point()});  // fans and shared edges
+      for (int t = 0; t < 4; ++t) tris.push_back({point(), point(), point()});
+      Vec3f target;
+      const int kind = k % 4;
+      const Tri& on = tris[rng.below(tris.size())];
+      if (kind == 0) target = shared0;                                     // a shared vertex, exactly
+      else if (kind == 1) target = Vec3f(Vec3d(on.a) * 0.5 + Vec3d(on.b) * 0.5);  // an edge, rounded
+      else target = point();
+      const Vec3d w(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
+      Ray ray;
+      if (kind == 0) {
+        if (!ray_exactly_through(target, w, 3.0 * scale, ray)) continue;
+      } else {
+        ray = Ray{Vec3f(Vec3d(target) - w * (3.0 * scale)), Vec3f(w * (3.0 * scale)), 0.0f, INFINITY};
+      }
+      if (k % 5 == 0) ray.tmax = 1.0f;  // the hit at an interval end
+      ++rays;
+      auto ctx = CertifiedKernel::prepare(ray);
+      int best = -1;
+      TriangleHit h;
+      for (std::size_t i = 0; i < tris.size(); ++i)
+        if (CertifiedKernel::intersect(ctx, static_cast<unsigned>(i), tris[i].a, tris[i].b, tris[i].c, h))
+          best = static_cast<int>(i);
+      exact_paths += ctx.exact != nullptr;
+      EXPECT_TRUE(exactly_first(ray, tris, best)) << "scale " << scale << ", ray " << k << " (kind " << kind << ")";
+    }
+  }
+  EXPECT_GT(exact_paths, 0u);
+  EXPECT_LT(exact_paths, rays) << "the float filter certified nothing";
+}
+
+// Spheres: a ray tangent to a sphere touches it (decided exactly), and the roots of two spheres
+// are ordered exactly against each other and against triangles.
+TEST(CertifiedKernel, DecidesTangentSpheresAndOrdersRootsExactly) {
+  const FloatModeScope ftz(true);
+  const Sphere s{{0, 0, 0}, 1.0f};
+  const Ray tangent{{1.0f, 0.0f, -5.0f}, {0, 0, 1}};  // touches (1, 0, 0)
+  auto ctx = CertifiedKernel::prepare(tangent);
+  TriangleHit h;
+  ASSERT_TRUE(CertifiedKernel::intersect_sphere(ctx, 0, s, h));
+  EXPECT_FLOAT_EQ(h.t, 5.0f);
+  EXPECT_NE(ctx.exact, nullptr) << "a tangent ray cannot be certified in float";
+  const Ray outside{{std::nextafter(1.0f, 2.0f), 0.0f, -5.0f}, {0, 0, 1}};
+  auto ctx2 = CertifiedKernel::prepare(outside);
+  EXPECT_FALSE(CertifiedKernel::intersect_sphere(ctx2, 0, s, h));
+  // A triangle in the plane z = -1 (the sphere's first root along the axis is also z = -1).
+  const Ray axis{{0.0f, 0.0f, -5.0f}, {0, 0, 1}};
+  auto ctx3 = CertifiedKernel::prepare(axis);
+  EXPECT_TRUE(CertifiedKernel::intersect_sphere(ctx3, 1, s, h));
+  CertifiedKernel::intersect(ctx3, 2, {-1, -1, -1}, {2, -1, -1}, {-1, 2, -1}, h);  // a tie at t = 4
+  EXPECT_TRUE(ctx3.prim == 1 || ctx3.prim == 2);
+  EXPECT_FLOAT_EQ(ctx3.best.t, 4.0f);
+  EXPECT_TRUE(CertifiedKernel::intersect_sphere(ctx3, 3, {{0, 0, -1.5f}, 0.25f}, h));  // first root at z = -1.75
+  EXPECT_EQ(ctx3.prim, 3u);
+}
+
+// The counter: a ray that needed the exact path is counted once, however many exact decisions
+// it made; a ray the float filter decided is not counted.
+TEST(CertifiedKernel, CountsRaysThatTookTheExactPathOnce) {
+  const auto scene = make_scene("sphere:n=2000");
+  const auto accel = make_accelerator("bvh:kernel=certified", scene);
+  // Touching rays pass exactly through a vertex: no float or double enclosure decides them.
+  const std::vector<Ray> vertex_rays = make_ray_set("touching:64", scene), primary = make_ray_set("primary:1024", scene);
+  const TraceResult v = trace_rays(*accel, vertex_rays, TraceOptions{1, true, false});
+  EXPECT_EQ(v.counters.exact_fallbacks, vertex_rays.size()) << "every ray exactly through a vertex needs the exact path";
+  const TraceResult p = trace_rays(*accel, primary, TraceOptions{1, true, false});
+  EXPECT_LT(p.counters.exact_fallbacks, primary.size() / 50) << "primary rays mostly certify in float";
+  const auto watertight = make_accelerator("bvh", scene);
+  EXPECT_EQ(trace_rays(*watertight, vertex_rays, TraceOptions{1, true, false}).counters.exact_fallbacks, 0u);
+}
+
+// Invalid configurations of the certified kernel are input errors (one line, exit 2 in the tool).
+TEST(CertifiedKernel, RequiresConservativeTraversal) {
+  const auto scene = make_scene("sphere:n=64");
+  EXPECT_THROW(make_accelerator("bvh:kernel=certified,robust=off", scene), InputError);
+  EXPECT_THROW(make_accelerator("grid:kernel=certified,accept=first", scene), InputError);
+  EXPECT_THROW(make_accelerator("kdtree:kernel=exact", scene), InputError);
+  EXPECT_NO_THROW(make_accelerator("brute:kernel=certified", scene));
+}
+
+}  // namespace
+}  // namespace raylab
