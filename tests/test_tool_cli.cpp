@@ -64,6 +64,14 @@ TEST(ToolCli, BadInputGivesOneErrorLineAndExitStatusTwo) {
       "info 'stadium:object=(soup:n=10'",
       "render --scene soup:n=100 --out image.jpg",
       "render --scene soup:n=100 --accel embree --heatmap --out /tmp/raylab_cli_heat.png",
+      "trace --scene sphere:n=64 --accel bvh:kernel=certified,robust=off",
+      "trace --scene sphere:n=64 --accel grid:kernel=certified,accept=first",
+      "trace --scene sphere:n=64 --accel kdtree:kernel=mt",
+      "trace --scene transformed:of=sphere,rotate=w:30",
+      "trace --scene transformed:of=sphere,translate=1:2",
+      "trace --scene transformed:of=sphere,scale=0",
+      "trace --scene 'transformed:of=(sphere:radius=1e10),scale=1e30'",
+      "trace --scene soup:n=100 --rays touching:10",
   };
   for (const auto& args : cases) {
     const ToolRun r = run_tool(args);
@@ -85,6 +93,39 @@ TEST(ToolCli, TracePrintsOneJsonObjectAndBruteForceMatchesTheOracle) {
   EXPECT_EQ(j["mismatches"], 0);
   EXPECT_EQ(j["threads"], 1);
   EXPECT_DOUBLE_EQ(j["prim_tests_per_ray"].get<double>(), static_cast<double>(j["triangles"].get<int>()));
+}
+
+// --check exact counts mismatches per contact class (the exact oracle classifies every ray) and
+// judges the certified kernel by the exact rule; --classify writes each ray's class into
+// --hits-out; the exact path is counted per ray.
+TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
+  const std::string hits_path = write_file("classified.csv", "");
+  const ToolRun w = run_tool("trace --scene sphere:n=2000 --accel brute --rays touching:500 --threads 2 --check exact "
+                             "--classify --json --hits-out " + hits_path);
+  ASSERT_EQ(w.status, 0) << w.err;
+  const auto j = nlohmann::json::parse(w.out);
+  for (const char* key : {"mismatches_crossing", "mismatches_touching", "mismatches_on_surface", "ill_conditioned_rays",
+                          "rays_touching", "exact_fallbacks_per_ray", "check_rule"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["rays_touching"], 500);
+  EXPECT_EQ(j["ill_conditioned_rays"], 500);
+  EXPECT_EQ(j["check_rule"], "tolerance");
+  EXPECT_GT(j["mismatches_touching"].get<int>(), 0) << "the watertight kernel decides no touching ray wrong?";
+  EXPECT_EQ(j["mismatches"], j["mismatches_touching"]);
+  std::ifstream in(hits_path);
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  EXPECT_EQ(header, "ray,prim,t,u,v,contact");
+  EXPECT_EQ(row.substr(row.rfind(',') + 1), "touching+ill");
+
+  const ToolRun c = run_tool("trace --scene sphere:n=2000 --accel bvh:kernel=certified --rays touching:500 --threads 2 "
+                             "--check exact --json");
+  ASSERT_EQ(c.status, 0) << c.err;
+  const auto k = nlohmann::json::parse(c.out);
+  EXPECT_EQ(k["check_rule"], "exact");
+  EXPECT_EQ(k["mismatches"], 0);
+  EXPECT_DOUBLE_EQ(k["exact_fallbacks_per_ray"].get<double>(), 1.0);
 }
 
 // Determinism across runs (issue 6): two separate processes build the same structure (its

@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -26,6 +27,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "accel/exact/contact_classes.h"
 #include "cost/auto_accel.h"
 #include "geometry/float_mode.h"
 #include "geometry/input_error.h"
@@ -85,13 +87,26 @@ auto timed_step(const std::string& what, Work&& work, double* seconds = nullptr)
   }
 }
 
-/// Any-hit results: CSV `ray,blocked` with blocked 0 or 1.
-void write_blocked_csv(const std::string& path, const std::vector<std::uint8_t>& blocked) {
+/// Any-hit results: CSV `ray,blocked` with blocked 0 or 1 (and `contact` with --classify).
+void write_blocked_csv(const std::string& path, const std::vector<std::uint8_t>& blocked,
+                       const std::vector<std::string>* contacts) {
   std::ofstream out(path);
   if (!out) throw InputError(path + ": cannot write");
-  out << "ray,blocked\n";
-  for (std::size_t i = 0; i < blocked.size(); ++i) out << i << ',' << int(blocked[i]) << '\n';
+  out << (contacts ? "ray,blocked,contact\n" : "ray,blocked\n");
+  for (std::size_t i = 0; i < blocked.size(); ++i) {
+    out << i << ',' << int(blocked[i]);
+    if (contacts) out << ',' << (*contacts)[i];
+    out << '\n';
+  }
   if (!out) throw InputError(path + ": write failed");
+}
+
+/// The `contact` column of --classify: the class, with `+ill` for an ill-conditioned ray.
+std::vector<std::string> contact_labels(const std::vector<RayContact>& classes) {
+  std::vector<std::string> labels;
+  labels.reserve(classes.size());
+  for (const RayContact& c : classes) labels.push_back(std::string(contact_name(c.contact)) + (c.ill_conditioned ? "+ill" : ""));
+  return labels;
 }
 
 void print_accels() {
@@ -160,6 +175,7 @@ struct TraceCommand {
   int threads = 0;
   bool json = false;
   bool counters = true;
+  bool classify = false;
 };
 
 int run_trace(const TraceCommand& o) {
@@ -207,6 +223,7 @@ int run_trace(const TraceCommand& o) {
   j["prim_tests_per_ray"] = n > 0 ? static_cast<double>(counters.prim_tests) / n : 0.0;
   j["prim_hits_per_test"] = counters.prim_tests > 0 ? static_cast<double>(counters.prim_hits) / counters.prim_tests : 0.0;
   j["mailbox_skips_per_ray"] = n > 0 ? static_cast<double>(counters.mailbox_skips) / n : 0.0;
+  j["exact_fallbacks_per_ray"] = n > 0 ? static_cast<double>(counters.exact_fallbacks) / n : 0.0;
   j["accel_bytes"] = stats.bytes;
   j["bytes_per_primitive"] = scene->total_primitive_count() > 0 ? stats.bytes / scene->total_primitive_count() : 0.0;
   j["accel_nodes"] = stats.nodes;
@@ -229,6 +246,21 @@ int run_trace(const TraceCommand& o) {
   }
   j["build_rss_growth_bytes"] = peak_rss_bytes() - rss_before;
 
+  // The exact oracle's classes of the rays: with --check exact (mismatches per class) and --classify.
+  std::vector<RayContact> classes;
+  if (o.classify || o.check == "exact")
+    classes = timed_step("classifying the rays' contacts", [&] { return classify_contacts(scene, rays, o.threads); });
+  if (!classes.empty()) {
+    std::size_t ill = 0;
+    std::array<std::size_t, 4> per_class{};
+    for (const RayContact& c : classes) {
+      ill += c.ill_conditioned;
+      ++per_class[static_cast<std::size_t>(c.contact)];
+    }
+    for (const Contact k : {Contact::none, Contact::crossing, Contact::touching, Contact::on_surface})
+      j[std::string("rays_") + contact_name(k)] = per_class[static_cast<std::size_t>(k)];
+    j["ill_conditioned_rays"] = ill;
+  }
   if (!o.check.empty()) {
     double check_s = 0;
     auto reference = timed_step("building the " + o.check + " reference",
@@ -236,21 +268,34 @@ int run_trace(const TraceCommand& o) {
     const TraceResult ref = timed_step("tracing the " + o.check + " reference",
                                        [&] { return trace_rays(*reference, rays, TraceOptions{o.threads, false, any_hit}); },
                                        &check_s);
-    const HitComparison c = any_hit ? compare_occlusion(timed.blocked, ref.blocked)
-                                    : compare_hits(rays, timed.hits, ref.hits, length(Vec3d(scene->bounds().diagonal())));
+    // Methods stated exact (the exact and certified kernels) are checked by the exact rule.
+    const bool exact_rule = o.check == "exact" && accuracy_bound(o.accel).exact;
+    const std::vector<RayContact>* cls = classes.empty() ? nullptr : &classes;
+    const HitComparison c = any_hit      ? compare_occlusion(timed.blocked, ref.blocked, cls)
+                            : exact_rule ? compare_hits_exact(*scene, rays, timed.hits, ref.hits, cls)
+                                         : compare_hits(rays, timed.hits, ref.hits,
+                                                        length(Vec3d(scene->bounds().diagonal())), cls);
     j["check"] = o.check;
+    j["check_rule"] = any_hit ? "blocked" : (exact_rule ? "exact" : "tolerance");
     j["check_s"] = check_s;
     j["mismatches"] = c.mismatches;
     j["ties"] = c.ties;
     j["false_hits"] = c.false_hits;
     j["missed_hits"] = c.missed_hits;
     j["wrong_t"] = c.wrong_t;
+    if (cls) {
+      for (const Contact k : {Contact::none, Contact::crossing, Contact::touching, Contact::on_surface})
+        j[std::string("mismatches_") + contact_name(k)] = c.class_mismatches[static_cast<std::size_t>(k)];
+      j["mismatches_ill_conditioned"] = c.ill_conditioned_mismatches;
+    }
     j["first_mismatch_rays"] = c.first_mismatches;
   }
   j["peak_rss_bytes"] = peak_rss_bytes();
   if (!o.hits_out.empty()) {
-    if (any_hit) write_blocked_csv(o.hits_out, timed.blocked);
-    else write_hits_csv(o.hits_out, timed.hits, scene.get());
+    const std::vector<std::string> labels = o.classify ? contact_labels(classes) : std::vector<std::string>{};
+    const std::vector<std::string>* contacts = o.classify ? &labels : nullptr;
+    if (any_hit) write_blocked_csv(o.hits_out, timed.blocked, contacts);
+    else write_hits_csv(o.hits_out, timed.hits, scene.get(), contacts);
   }
   if (o.json) {
     std::cout << j.dump() << "\n";
@@ -339,10 +384,15 @@ int main(int argc, char** argv) {
   trace_cmd->add_option("--rays", trace.rays, "ray spec: primary:N, diffuse:N, shadow:N, ao:N, lines:N, edges:N, vertices:N, file:PATH");
   trace_cmd->add_option("--threads", trace.threads, "tracing threads (0: all; 1: single-core figures)");
   trace_cmd->add_option("--check", trace.check, "compare every ray against a reference: exact | brute");
-  trace_cmd->add_option("--hits-out", trace.hits_out, "write hits as CSV ray,prim,t,u,v (plus instance,base on an instanced scene)");
+  trace_cmd->add_option("--hits-out", trace.hits_out,
+                        "write hits as CSV ray,prim,t,u,v (plus instance,base on an instanced scene; contact with "
+                        "--classify)");
   trace_cmd->add_option("--rays-out", trace.rays_out, "write the traced rays in the ray file format");
   trace_cmd->add_flag("--json", trace.json, "print one JSON object instead of key: value lines");
   trace_cmd->add_flag("!--no-counters", trace.counters, "skip the second, counted pass");
+  trace_cmd->add_flag("--classify", trace.classify,
+                      "classify every ray's first contact exactly (crossing, touching, on_surface, none; +ill when "
+                      "ill-conditioned): counts in the output, a `contact` column in --hits-out");
 
   RenderCommand render;
   auto* render_cmd = app.add_subcommand("render", "render a shaded image or a traversal-cost heatmap to PNG");

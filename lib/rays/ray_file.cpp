@@ -1,6 +1,7 @@
 #include "rays/ray_file.h"
 
 #include <charconv>
+#include <stdexcept>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -162,7 +163,9 @@ std::vector<Ray> read_rays(const std::string& path) {
   return rays;
 }
 
-void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const Scene* scene) {
+void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const Scene* scene,
+                    const std::vector<std::string>* contacts) {
+  if (contacts && contacts->size() != hits.size()) throw std::invalid_argument("write_hits_csv: one contact per hit");
   const bool with_base = scene && scene->instanced();
   bool instanced = with_base;
   for (const Hit& h : hits) instanced = instanced || h.instance != kInvalidId;
@@ -171,12 +174,21 @@ void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const
       if (h.valid() && h.instance != kInvalidId && h.instance >= scene->instances.size())
         throw std::logic_error("write_hits_csv: a hit names instance " + std::to_string(h.instance) + " the scene lacks");
   Writer w(path);
-  w.put(with_base ? "ray,prim,t,u,v,instance,base\n" : instanced ? "ray,prim,t,u,v,instance\n" : "ray,prim,t,u,v\n");
+  w.put(with_base ? "ray,prim,t,u,v,instance,base" : instanced ? "ray,prim,t,u,v,instance" : "ray,prim,t,u,v");
+  w.put(contacts ? ",contact\n" : "\n");
   for (std::size_t i = 0; i < hits.size(); ++i) {
     const Hit& h = hits[i];
     w.put(i);
+    const auto end_row = [&] {
+      if (contacts) {
+        w.put(",");
+        w.put((*contacts)[i].c_str());
+      }
+      w.put("\n");
+    };
     if (!h.valid()) {
-      w.put(with_base ? ",-1,inf,0,0,-1,-1\n" : instanced ? ",-1,inf,0,0,-1\n" : ",-1,inf,0,0\n");
+      w.put(with_base ? ",-1,inf,0,0,-1,-1" : instanced ? ",-1,inf,0,0,-1" : ",-1,inf,0,0");
+      end_row();
       continue;
     }
     w.put(",");
@@ -195,7 +207,7 @@ void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const
       if (h.instance == kInvalidId) w.put("-1");
       else w.put(static_cast<std::size_t>(scene->instances[h.instance].base));
     }
-    w.put("\n");
+    end_row();
   }
   w.close();
 }
@@ -204,11 +216,13 @@ std::vector<Hit> read_hits_csv(const std::string& path) {
   LineReader reader(path);
   std::string line;
   if (!reader.next(line)) throw InputError(path + ": empty file, expected the header ray,prim,t,u,v");
+  const bool contact = line.size() > 8 && line.compare(line.size() - 8, 8, ",contact") == 0;
+  if (contact) line.resize(line.size() - 8);
   std::size_t columns;
   if (line == "ray,prim,t,u,v") columns = 5;
   else if (line == "ray,prim,t,u,v,instance") columns = 6;
   else if (line == "ray,prim,t,u,v,instance,base") columns = 7;
-  else throw reader.fault("expected the header ray,prim,t,u,v[,instance[,base]]");
+  else throw reader.fault("expected the header ray,prim,t,u,v[,instance[,base]][,contact]");
   const bool instanced = columns >= 6;
   const auto parse_id = [&](std::string_view s, const char* what) -> unsigned {
     if (s == "-1") return kInvalidId;
@@ -227,8 +241,9 @@ std::vector<Hit> read_hits_csv(const std::string& path) {
         fields.push_back(std::string_view(line).substr(start, i - start));
         start = i + 1;
       }
-    if (fields.size() != columns)
-      throw reader.fault("expected " + std::to_string(columns) + " fields, found " + std::to_string(fields.size()));
+    if (fields.size() != columns + (contact ? 1 : 0))
+      throw reader.fault("expected " + std::to_string(columns + (contact ? 1 : 0)) + " fields, found " +
+                         std::to_string(fields.size()));
     std::uint64_t index;
     const auto [p, ec] = std::from_chars(fields[0].data(), fields[0].data() + fields[0].size(), index);
     if (ec != std::errc() || p != fields[0].data() + fields[0].size() || index != hits.size())

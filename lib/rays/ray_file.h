@@ -16,8 +16,9 @@
 /// the index into Scene::instances of the instance hit, and `base`, the index into Scene::bases
 /// of the base it places; both are -1 for a miss and for a hit on the flat geometry, and `prim`
 /// is then the primitive id within that base (or within the flat geometry). Without a scene, the
-/// `instance` column alone is written when any hit carries one. Floats are written shortest
-/// round-trip.
+/// `instance` column alone is written when any hit carries one. With contact classes (`raylab trace --classify`) a last column `contact` holds each
+/// ray's class (none, crossing, touching, on_surface, with `+ill` appended for an ill-conditioned
+/// ray; accel/exact/contact_classes.h). Floats are written shortest round-trip.
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -42,12 +43,15 @@ void write_rays(const std::string& path, const std::vector<Ray>& rays);
 /// cannot be read; and an error for more than kMaxRaysPerFile rays.
 std::vector<Ray> read_rays(const std::string& path);
 
-/// Writes one CSV row per hit (see above); `scene`, when given, is the scene the hits are on.
-/// Throws InputError when the file cannot be written.
-void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const Scene* scene = nullptr);
+/// Writes one CSV row per hit (see above); `scene`, when given, is the scene the hits are on;
+/// `contacts` (one label per hit), when given, fills the column `contact`. Throws InputError
+/// when the file cannot be written.
+void write_hits_csv(const std::string& path, const std::vector<Hit>& hits, const Scene* scene = nullptr,
+                    const std::vector<std::string>* contacts = nullptr);
 
-/// Reads a hit file written by write_hits_csv (with or without the instance and base columns;
-/// the base column is checked to be -1 exactly where the instance is, and not returned). Throws
+/// Reads a hit file written by write_hits_csv (with or without the instance, base and contact
+/// columns; the base column is checked to be -1 exactly where the instance is, and not returned;
+/// contact labels are not read back). Throws
 /// InputError "PATH:LINE: <fault>" on a wrong header, a wrong field count, a ray column that is
 /// not the row index, a prim that is neither -1 nor a valid id, a miss whose t is not inf, or a
 /// number that does not parse.
