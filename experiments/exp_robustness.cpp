@@ -1,4 +1,4 @@
-// Robustness (issues 6 and 15): where methods fail, and what certainty costs. Runs every
+// Robustness (issues 6 and 15): where methods fail. Runs every
 // accelerator the factory knows (with its listed variants: the watertight, Möller-Trumbore,
 // exact and certified kernels through brute, kernel=certified on every structure, Embree and
 // Embree's robust mode) against the exact oracle on the adversarial cases of
@@ -7,12 +7,9 @@
 // a closed mesh far from the origin, tiny and huge (`transformed`). The oracle classifies every
 // ray (crossing, touching, on-surface, ill-conditioned; accel/exact/contact_classes.h), and
 // mismatches are counted per class, by the exact rule for methods stated exact.
-// The cost of certainty: single-thread throughput of the fast, robust and certified BVH paths
-// next to Embree and Embree robust (same rays, runs alternated, best kept), certified against
-// watertight for every structure, the fraction of rays that take the exact path per ray kind,
-// and the certified kernel against `exact` on vertex-aimed rays.
+// What certainty costs is measured by exp_certainty.
 // Also: the cost of non-finite rays and memory per triangle next to Embree's.
-// Writes robustness.csv, robustness_classes.csv, robustness_cost.csv, robustness_exact_path.csv,
+// Writes robustness.csv, robustness_classes.csv,
 // robustness_nonfinite.csv, robustness_memory.csv and robustness.md.
 #include <fmt/format.h>
 
@@ -42,18 +39,6 @@ struct Count {
   }
 };
 
-/// Single-thread seconds of tracing `rays` through each accelerator, the runs alternated
-/// (accelerator by accelerator, `reps` rounds) and the fastest kept: machine noise hits every
-/// accelerator alike.
-std::vector<double> alternated_best_seconds(const std::vector<const Aggregate*>& accels, const std::vector<Ray>& rays,
-                                            bool any_hit, int reps) {
-  std::vector<double> best(accels.size(), 1e300);
-  for (int r = 0; r < reps; ++r)
-    for (std::size_t i = 0; i < accels.size(); ++i)
-      best[i] = std::min(best[i], trace_rays(*accels[i], rays, TraceOptions{1, false, any_hit}).seconds);
-  return best;
-}
-
 std::string rate_cell(std::size_t mismatches, std::size_t rays) {
   if (rays == 0) return "–";
   return mismatches == 0 ? "0" : fmt::format("{} ({:.1f}%)", mismatches, 100.0 * mismatches / rays);
@@ -62,7 +47,7 @@ std::string rate_cell(std::size_t mismatches, std::size_t rays) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options opt = parse_options(argc, argv, "adversarial cases, contact classes, the cost of certainty");
+  const Options opt = parse_options(argc, argv, "adversarial cases, contact classes, non-finite rays, memory per triangle");
   try {
     const auto specs = all_accel_specs();
     std::vector<adversarial::Case> cases = adversarial::synthetic_cases(opt.full() ? 4 : 1);
@@ -125,7 +110,7 @@ int main(int argc, char** argv) {
       }
     }
 
-    std::string md = "## Robustness: where methods fail, and what certainty costs\n\n";
+    std::string md = "## Robustness: where methods fail\n\n";
     md += "Every accelerator against the exact oracle on the adversarial cases of the test suite "
           "(`tests/test_adversarial_cases.h`, held to each method's stated accuracy bound by "
           "`tests/test_adversarial.cpp`), on edge-, vertex-aimed, touching and grazing rays of every closed CGAL demo "
@@ -193,136 +178,6 @@ int main(int argc, char** argv) {
       }
     }
 
-    // The cost of certainty.
-    {
-      const std::vector<std::string> scene_specs =
-          opt.full() ? std::vector<std::string>{"cgal:bunny00", "cgal:refined_elephant", "cgal:armadillo",
-                                                "sphereflake:depth=3,as=triangles"}
-                     : std::vector<std::string>{"cgal:bunny00", "cgal:refined_elephant"};
-      const std::size_t n = opt.full() ? 262144 : 65536;
-      const int reps = opt.full() ? 9 : 5;
-      const std::vector<std::string> paths = {"embree", "embree-robust", "bvh:robust=off", "bvh", "bvh:kernel=certified"};
-      CsvWriter cost(opt.out + "/robustness_cost.csv",
-                     {"scene", "triangles", "rays", "accel", "rays_count", "ns_per_ray", "mrays_per_s", "ratio_to_embree",
-                      "ratio_to_bvh", "exact_fallbacks_per_ray"});
-      md += fmt::format("\n### The cost of certainty\n\nSingle-thread throughput (million rays per second) of the BVH's "
-                        "three paths, fast (`bvh:robust=off`: plain slab test, Moller-Trumbore), robust (`bvh`, the "
-                        "default: Ize's conservative box test, watertight kernel) and certified (`bvh:kernel=certified`: "
-                        "Ize's test, the certified kernel: exact first hits), next to Embree and Embree robust, on the "
-                        "same {} rays in one process, runs alternated {} times and the best kept. Goals of issue 15: "
-                        "certified at most 1.10x the time of `bvh` and at least 0.85x Embree's default throughput.\n\n",
-                        n, reps);
-      md += "| scene | rays | embree | embree-robust | bvh:robust=off | bvh | bvh:kernel=certified | certified / bvh time "
-            "| certified / embree throughput | exact path |\n|---|---|---|---|---|---|---|---|---|---|\n";
-      double worst_vs_bvh = 0.0, worst_vs_embree = 1e300;
-      for (const auto& scene_spec : scene_specs) {
-        std::shared_ptr<const Scene> scene;
-        try {
-          scene = make_scene(scene_spec);
-        } catch (const InputError& e) {
-          progress(std::string("robustness: skipping ") + e.what());
-          continue;
-        }
-        std::vector<std::unique_ptr<Aggregate>> owned;
-        std::vector<const Aggregate*> accels;
-        for (const auto& p : paths) {
-          owned.push_back(make_accelerator(p, scene));
-          accels.push_back(owned.back().get());
-        }
-        for (const std::string kind : {"primary", "diffuse", "shadow"}) {
-          const std::string ray_spec = kind + ":" + std::to_string(n);
-          progress(fmt::format("robustness: cost of certainty, {} {}", scene_spec, ray_spec));
-          const auto rays = make_ray_set(ray_spec, scene);
-          const bool any_hit = is_any_hit_ray_spec(ray_spec);
-          const std::vector<double> s = alternated_best_seconds(accels, rays, any_hit, reps);
-          const double fallbacks =
-              static_cast<double>(trace_rays(*accels.back(), rays, TraceOptions{1, true, any_hit}).counters.exact_fallbacks) /
-              static_cast<double>(rays.size());
-          const double vs_bvh = s[4] / s[3], vs_embree = s[0] / s[4];
-          worst_vs_bvh = std::max(worst_vs_bvh, vs_bvh);
-          worst_vs_embree = std::min(worst_vs_embree, vs_embree);
-          md += fmt::format("| `{}` | {} |", scene_spec, kind);
-          for (std::size_t i = 0; i < paths.size(); ++i) {
-            const double mrays = static_cast<double>(rays.size()) / s[i] * 1e-6;
-            md += fmt::format(" {:.2f} |", mrays);
-            cost.row(scene_spec, scene->mesh.size(), kind, paths[i], rays.size(), s[i] / rays.size() * 1e9, mrays,
-                     s[0] / s[i], s[3] / s[i], i == 4 ? fallbacks : 0.0);
-          }
-          md += fmt::format(" {:.3f} | {:.2f} | {:.4f}% |\n", vs_bvh, vs_embree, 100.0 * fallbacks);
-        }
-      }
-      md += fmt::format("\nWorst case over these scenes and ray kinds: certified / bvh time **{:.3f}** (goal <= 1.10: "
-                        "{}), certified / Embree throughput **{:.2f}** (goal >= 0.85: {}).\n",
-                        worst_vs_bvh, worst_vs_bvh <= 1.10 ? "met" : "not met", worst_vs_embree,
-                        worst_vs_embree >= 0.85 ? "met" : "not met");
-      md += "\n![the cost of certainty](robustness_certainty.png)\n";
-
-      // Certified against watertight for every structure (one scene, diffuse rays).
-      {
-        const auto scene = make_scene(scene_specs.front());
-        const auto rays = make_ray_set("diffuse:" + std::to_string(n / 2), scene);
-        md += fmt::format("\nCertified against watertight for every structure: single-thread time per ray on `{}`, "
-                          "{} diffuse rays (alternated, best of {}).\n\n| structure | watertight ns/ray | certified "
-                          "ns/ray | certified / watertight |\n|---|---|---|---|\n",
-                          scene_specs.front(), rays.size(), reps);
-        for (const std::string base : {"brute", "grid", "nested-grid", "kdtree", "octree", "bsp", "bvh:width=2",
-                                        "bvh:width=4", "bvh"}) {
-          if (base == "brute") continue;  // |rays| x |triangles|: too slow to time here
-          const std::string certified = base + (base.find(':') == std::string::npos ? ":" : ",") + "kernel=certified";
-          progress("robustness: certified against watertight, " + base);
-          const auto a = make_accelerator(base, scene), b = make_accelerator(certified, scene);
-          const std::vector<double> s = alternated_best_seconds({a.get(), b.get()}, rays, false, reps);
-          md += fmt::format("| `{}` | {:.1f} | {:.1f} | {:.3f} |\n", base, s[0] / rays.size() * 1e9,
-                            s[1] / rays.size() * 1e9, s[1] / s[0]);
-          cost.row(scene_specs.front(), scene->mesh.size(), std::string("diffuse"), base, rays.size(),
-                   s[0] / rays.size() * 1e9, rays.size() / s[0] * 1e-6, 0.0, 0.0, 0.0);
-          cost.row(scene_specs.front(), scene->mesh.size(), std::string("diffuse"), certified, rays.size(),
-                   s[1] / rays.size() * 1e9, rays.size() / s[1] * 1e-6, 0.0, s[0] / s[1], 0.0);
-        }
-      }
-
-      // The exact path: fraction of rays per kind, and the cost against the exact oracle.
-      CsvWriter path(opt.out + "/robustness_exact_path.csv",
-                     {"scene", "rays", "rays_count", "exact_fallbacks_per_ray", "certified_ns_per_ray", "exact_ns_per_ray",
-                      "speedup_over_exact"});
-      md += "\nThe exact path: the fraction of rays for which `bvh:kernel=certified` asked the exact predicates "
-            "(`exact_fallbacks_per_ray` of `raylab trace`), and its time per ray against the exact oracle `exact` "
-            "(single thread, alternated, best of 3). Goal of issue 15: at least 10x faster than `exact` on "
-            "vertex-aimed rays.\n\n| scene | rays | exact path | certified us/ray | exact us/ray | exact / certified "
-            "|\n|---|---|---|---|---|---|\n";
-      double worst_speedup = 1e300;
-      for (const auto& scene_spec : scene_specs) {
-        std::shared_ptr<const Scene> scene;
-        try {
-          scene = make_scene(scene_spec);
-        } catch (const InputError&) {
-          continue;
-        }
-        const auto certified = make_accelerator("bvh:kernel=certified", scene);
-        const auto exact = make_accelerator("exact", scene);
-        for (const std::string kind : {"primary", "diffuse", "shadow", "ao", "lines", "edges", "vertices", "touching",
-                                       "grazing"}) {
-          const bool feature = kind == "edges" || kind == "vertices" || kind == "touching" || kind == "grazing";
-          const std::string ray_spec = kind + ":" + std::to_string(feature ? (opt.full() ? 16384 : 4096) : n / 4);
-          progress(fmt::format("robustness: exact path, {} {}", scene_spec, ray_spec));
-          const auto rays = make_ray_set(ray_spec, scene);
-          const bool any_hit = is_any_hit_ray_spec(ray_spec);
-          const double fallbacks =
-              static_cast<double>(trace_rays(*certified, rays, TraceOptions{1, true, any_hit}).counters.exact_fallbacks) /
-              static_cast<double>(rays.size());
-          const std::vector<double> s = alternated_best_seconds({certified.get(), exact.get()}, rays, any_hit, 3);
-          const double c_us = s[0] / rays.size() * 1e6, e_us = s[1] / rays.size() * 1e6;
-          if (kind == "vertices" || kind == "touching") worst_speedup = std::min(worst_speedup, e_us / c_us);
-          md += fmt::format("| `{}` | {} | {:.3f}% | {:.3f} | {:.2f} | {:.0f} |\n", scene_spec, kind, 100.0 * fallbacks, c_us,
-                            e_us, e_us / c_us);
-          path.row(scene_spec, kind, rays.size(), fallbacks, c_us * 1e3, e_us * 1e3, e_us / c_us);
-        }
-      }
-      md += fmt::format("\nOn vertex-aimed rays (`vertices`, `touching`) the certified BVH is at least **{:.0f}x** "
-                        "faster than `exact` (goal >= 10x: {}).\n",
-                        worst_speedup, worst_speedup >= 10.0 ? "met" : "not met");
-    }
-
     // Non-finite rays: a defined "no hit", at no more than the cost of a valid ray.
     {
       const auto scene = make_scene(opt.full() ? "sphere:n=100000" : "sphere:n=20000");
@@ -381,7 +236,7 @@ int main(int argc, char** argv) {
       }
     }
     md += fmt::format("\nPer-case counts: robustness.csv (also any-hit mismatches, per class); robustness_classes.csv; "
-                      "robustness_cost.csv; robustness_exact_path.csv; robustness_nonfinite.csv; robustness_memory.csv. "
+                      "robustness_nonfinite.csv; robustness_memory.csv. "
                       "Measured by `build/experiments/exp_robustness --mode {}` (run by `./lab report`). {}.\n",
                       opt.mode, provenance());
     std::ofstream(opt.out + "/robustness.md") << md;

@@ -51,7 +51,7 @@ def plot_mismatches(out: pathlib.Path) -> None:
 
 
 def plot_certainty(out: pathlib.Path) -> None:
-    csv = out / "robustness_cost.csv"
+    csv = out / "certainty.csv"
     if not csv.exists():
         return
     df = pd.read_csv(csv)
@@ -70,7 +70,7 @@ def plot_certainty(out: pathlib.Path) -> None:
     ax.set_title("The cost of certainty: fast, robust and certified BVH against Embree")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "robustness_certainty.png", dpi=120)
+    fig.savefig(out / "certainty.png", dpi=120)
     plt.close(fig)
 
 

@@ -126,6 +126,15 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(k["check_rule"], "exact");
   EXPECT_EQ(k["mismatches"], 0);
   EXPECT_DOUBLE_EQ(k["exact_fallbacks_per_ray"].get<double>(), 1.0);
+
+  // `raylab accels` states each bound per class, and the certified one beside the default.
+  const ToolRun a = run_tool("accels");
+  ASSERT_EQ(a.status, 0) << a.err;
+  EXPECT_NE(a.out.find("max mismatch rate per class (tolerance rule): crossing 0 (edge/vertex-aimed: 0), touching 1"),
+            std::string::npos);
+  EXPECT_NE(a.out.find("accuracy with kernel=certified"), std::string::npos);
+  EXPECT_NE(a.out.find("(exact rule): crossing 0 (edge/vertex-aimed: 0), touching 0, on_surface 0, ill_conditioned 0"),
+            std::string::npos);
 }
 
 // Determinism across runs (issue 6): two separate processes build the same structure (its

@@ -109,13 +109,25 @@ std::vector<std::string> contact_labels(const std::vector<RayContact>& classes) 
   return labels;
 }
 
+/// An accuracy bound as `raylab accels` lists it: the statement, then the rate allowed per class.
+void print_accuracy(const std::string& label, const AccuracyBound& b) {
+  std::cout << "    " << label << ": " << b.statement << "\n      max mismatch rate per class ("
+            << (b.exact ? "exact rule" : "tolerance rule") << "): crossing " << b.crossing_other
+            << " (edge/vertex-aimed: " << b.crossing_features << "), touching " << b.touching << ", on_surface "
+            << b.on_surface << ", ill_conditioned " << b.ill_conditioned << "\n";
+}
+
 void print_accels() {
   for (const auto& k : accelerator_kinds()) {
     std::cout << k.name << "\n    " << k.summary << "\n";
     for (const auto& p : k.params)
       std::cout << "    " << p.key << "=...  " << p.description << " (default " << p.default_value << ")\n";
     SpecReader none(parse_spec(k.name));
-    std::cout << "    accuracy: " << k.accuracy(none).statement << "\n";
+    print_accuracy("accuracy", k.accuracy(none));
+    const bool has_certified = std::any_of(k.params.begin(), k.params.end(), [](const ParamDoc& p) {
+      return p.key == "kernel" && p.description.find("certified") != std::string::npos;
+    });
+    if (has_certified) print_accuracy("accuracy with kernel=certified", accuracy_bound(k.name + ":kernel=certified"));
   }
 }
 

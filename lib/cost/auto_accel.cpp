@@ -107,11 +107,11 @@ AccelKind make_auto_kind() {
             AccuracyBound loosest;
             for (const std::string& spec : auto_candidate_specs(families, model)) {
               const AccuracyBound b = accuracy_bound(spec);
-              loosest.max_mismatch_rate_closed_features =
-                  std::max(loosest.max_mismatch_rate_closed_features, b.max_mismatch_rate_closed_features);
-              loosest.max_mismatch_rate_open_features =
-                  std::max(loosest.max_mismatch_rate_open_features, b.max_mismatch_rate_open_features);
-              loosest.max_mismatch_rate_other = std::max(loosest.max_mismatch_rate_other, b.max_mismatch_rate_other);
+              loosest.crossing_features = std::max(loosest.crossing_features, b.crossing_features);
+              loosest.crossing_other = std::max(loosest.crossing_other, b.crossing_other);
+              loosest.touching = std::max(loosest.touching, b.touching);
+              loosest.on_surface = std::max(loosest.on_surface, b.on_surface);
+              loosest.ill_conditioned = std::max(loosest.ill_conditioned, b.ill_conditioned);
               loosest.statement = b.statement;
             }
             loosest.statement = "the bound of the structure it chooses; all candidates: " + loosest.statement;

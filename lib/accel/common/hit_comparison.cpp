@@ -30,6 +30,14 @@ void record(HitComparison& c, std::size_t i, bool mismatch, const std::vector<Ra
   c.ill_conditioned_mismatches += k.ill_conditioned;
 }
 
+/// Counts a hit where the reference misses, or a miss where it hits, as a mismatch; false when
+/// both hit or both miss (the caller then compares the two hits).
+bool presence_mismatch(HitComparison& c, const Hit& h, const Hit& r) {
+  if (h.valid() == r.valid()) return false;
+  ++(h.valid() ? c.false_hits : c.missed_hits);
+  return true;
+}
+
 void check_sizes(std::size_t rays, std::size_t a, std::size_t b, const std::vector<RayContact>* classes,
                  const char* what) {
   if (rays != a || rays != b || (classes && classes->size() != rays))
@@ -52,14 +60,8 @@ HitComparison compare_hits(const std::vector<Ray>& rays, const std::vector<Hit>&
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const Hit& h = hits[i];
     const Hit& r = reference[i];
-    bool mismatch = false;
-    if (h.valid() && !r.valid()) {
-      ++c.false_hits;
-      mismatch = true;
-    } else if (!h.valid() && r.valid()) {
-      ++c.missed_hits;
-      mismatch = true;
-    } else if (h.valid()) {
+    bool mismatch = presence_mismatch(c, h, r);
+    if (!mismatch && h.valid()) {
       const double dir_len = length(Vec3d(rays[i].dir));
       const double tol =
           kHitTolerance * (std::abs(double(r.t)) + (length(Vec3d(rays[i].org)) + scene_diagonal) / dir_len);
@@ -93,14 +95,8 @@ HitComparison compare_hits_exact(const Scene& scene, const std::vector<Ray>& ray
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const Hit& h = hits[i];
     const Hit& r = reference[i];
-    bool mismatch = false;
-    if (h.valid() && !r.valid()) {
-      ++c.false_hits;
-      mismatch = true;
-    } else if (!h.valid() && r.valid()) {
-      ++c.missed_hits;
-      mismatch = true;
-    } else if (h.valid() && (h.prim != r.prim || h.instance != r.instance)) {
+    bool mismatch = presence_mismatch(c, h, r);
+    if (!mismatch && h.valid() && (h.prim != r.prim || h.instance != r.instance)) {
       const unsigned a = flat_id(h), b = flat_id(r);
       ExactFirstHit got(rays[i]), ref(rays[i]);
       const bool valid_ids = a < flat->primitive_count() && b < flat->primitive_count();
