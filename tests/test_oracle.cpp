@@ -14,6 +14,7 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
@@ -42,13 +43,12 @@ const std::vector<std::string> kScenes = {
     "decimated:of=cgal:bunny00,faces=4000",
     "degenerate",
     "gltf-instances",
-    "cgal:couplingdown",
-    "transformed:of=(sphere:n=1500),rotate=1;2;3:37,translate=1e5:-3e4:2e5",
-    "transformed:of=cgal:couplingdown,rotate=x:50,scale=1e-6",
+    "transformed:of=(sphere:n=800),rotate=1;2;3:37,scale=100,translate=1e5:-3e4:2e5",
+    "transformed:of=cgal:anchor,rotate=x:50,scale=1e-6",
 };
 
 const std::vector<std::string> kRaySpecs = {"primary:4096", "diffuse:2048", "shadow:2048", "lines:4096",
-                                            "edges:2048",   "vertices:2048", "touching:512", "grazing:512"};
+                                            "edges:2048",   "vertices:2048", "touching:256", "grazing:256"};
 
 /// Shared edges and vertices, a zero-area triangle, a repeated-vertex triangle, duplicated
 /// and coplanar overlapping triangles, a fan of high valence, and identical bounds.
@@ -108,10 +108,12 @@ std::shared_ptr<const Scene> scene_for(const std::string& spec) {
 struct Reference {
   std::vector<Ray> rays;
   TraceResult exact;
-  std::vector<RayContact> classes;
+  /// The oracle's classes of the rays, made when a comparison first needs them (a run without
+  /// mismatches is within every bound whatever the classes).
+  std::optional<std::vector<RayContact>> classes;
 };
 
-const Reference& reference_for(const std::string& scene_spec, const std::string& ray_spec) {
+Reference& reference_for(const std::string& scene_spec, const std::string& ray_spec) {
   static std::map<std::pair<std::string, std::string>, Reference> cache;
   auto key = std::make_pair(scene_spec, ray_spec);
   auto it = cache.find(key);
@@ -121,7 +123,6 @@ const Reference& reference_for(const std::string& scene_spec, const std::string&
   ref.rays = make_ray_set(ray_spec, scene);
   const auto oracle = make_accelerator("exact", scene);
   ref.exact = trace_rays(*oracle, ref.rays, TraceOptions{0, false, is_any_hit_ray_spec(ray_spec)});
-  ref.classes = classify_contacts(scene, ref.rays);
   return cache.emplace(key, std::move(ref)).first->second;
 }
 
@@ -156,12 +157,19 @@ TEST_P(OracleSuite, AgreesWithTheExactOracleWithinItsStatedBound) {
   const double diagonal = length(Vec3d(scene->bounds().diagonal()));
   for (const auto& ray_spec : kRaySpecs) {
     if (!applicable(scene_spec, ray_spec)) continue;
-    const Reference& ref = reference_for(scene_spec, ray_spec);
+    Reference& ref = reference_for(scene_spec, ray_spec);
     const bool any_hit = is_any_hit_ray_spec(ray_spec);
     const TraceResult got = trace_rays(*accel, ref.rays, TraceOptions{0, false, any_hit});
-    const HitComparison c = any_hit     ? compare_occlusion(got.blocked, ref.exact.blocked, &ref.classes)
-                            : bound.exact ? compare_hits_exact(*scene, ref.rays, got.hits, ref.exact.hits, &ref.classes)
-                                          : compare_hits(ref.rays, got.hits, ref.exact.hits, diagonal, &ref.classes);
+    auto compare = [&](const std::vector<RayContact>* classes) {
+      return any_hit       ? compare_occlusion(got.blocked, ref.exact.blocked, classes)
+             : bound.exact ? compare_hits_exact(*scene, ref.rays, got.hits, ref.exact.hits, classes)
+                           : compare_hits(ref.rays, got.hits, ref.exact.hits, diagonal, classes);
+    };
+    HitComparison c = compare(nullptr);
+    if (c.mismatches > 0) {
+      if (!ref.classes) ref.classes = classify_contacts(scene, ref.rays);
+      c = compare(&*ref.classes);
+    }
     std::string why;
     EXPECT_TRUE(within_bound(bound, c, is_feature_ray_spec(ray_spec), &why))
         << accel_spec << " on " << scene_spec << " with " << ray_spec << ": " << why << " (" << c.false_hits
