@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
         try {
           scene = make_scene(scene_spec);
         } catch (const InputError& e) {
-          progress(std::string("robustness: skipping ") + e.what());
+          progress(std::string("certainty: skipping ") + e.what());
           continue;
         }
         std::vector<std::unique_ptr<Aggregate>> owned;
@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
         }
         for (const std::string kind : {"primary", "diffuse", "shadow"}) {
           const std::string ray_spec = kind + ":" + std::to_string(n);
-          progress(fmt::format("robustness: cost of certainty, {} {}", scene_spec, ray_spec));
+          progress(fmt::format("certainty: cost of certainty, {} {}", scene_spec, ray_spec));
           const auto rays = make_ray_set(ray_spec, scene);
           const bool any_hit = is_any_hit_ray_spec(ray_spec);
           const std::vector<double> s = alternated_best_seconds(accels, rays, any_hit, reps);
@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
                                         "bvh:width=4", "bvh"}) {
           if (base == "brute") continue;  // |rays| x |triangles|: too slow to time here
           const std::string certified = base + (base.find(':') == std::string::npos ? ":" : ",") + "kernel=certified";
-          progress("robustness: certified against watertight, " + base);
+          progress("certainty: certified against watertight, " + base);
           const auto a = make_accelerator(base, scene), b = make_accelerator(certified, scene);
           const std::vector<double> s = alternated_best_seconds({a.get(), b.get()}, rays, false, reps);
           md += fmt::format("| `{}` | {:.1f} | {:.1f} | {:.3f} |\n", base, s[0] / rays.size() * 1e9,
@@ -149,7 +149,7 @@ int main(int argc, char** argv) {
                                        "grazing"}) {
           const bool feature = kind == "edges" || kind == "vertices" || kind == "touching" || kind == "grazing";
           const std::string ray_spec = kind + ":" + std::to_string(feature ? (opt.full() ? 16384 : 4096) : n / 4);
-          progress(fmt::format("robustness: exact path, {} {}", scene_spec, ray_spec));
+          progress(fmt::format("certainty: exact path, {} {}", scene_spec, ray_spec));
           const auto rays = make_ray_set(ray_spec, scene);
           const bool any_hit = is_any_hit_ray_spec(ray_spec);
           const double fallbacks =
