@@ -21,7 +21,14 @@ Vec3d face_cross(const TriangleMesh& mesh, std::uint32_t tri) {
   return cross(p1 - p0, p2 - p0);
 }
 
-/// weld[i] = the smallest vertex index with the same position as vertex i.
+struct Incidence {
+  std::uint64_t feature;  ///< welded vertex, or (lo << 32 | hi) of an edge's welded vertices
+  std::uint32_t tri;
+  bool operator<(const Incidence& o) const { return feature != o.feature ? feature < o.feature : tri < o.tri; }
+};
+
+}  // namespace
+
 std::vector<std::uint32_t> weld_vertices(const TriangleMesh& mesh) {
   std::vector<std::uint32_t> order(mesh.vertices.size());
   std::iota(order.begin(), order.end(), 0u);
@@ -37,14 +44,6 @@ std::vector<std::uint32_t> weld_vertices(const TriangleMesh& mesh) {
   }
   return weld;
 }
-
-struct Incidence {
-  std::uint64_t feature;  ///< welded vertex, or (lo << 32 | hi) of an edge's welded vertices
-  std::uint32_t tri;
-  bool operator<(const Incidence& o) const { return feature != o.feature ? feature < o.feature : tri < o.tri; }
-};
-
-}  // namespace
 
 std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std::size_t n, double distance,
                               std::uint64_t seed) {

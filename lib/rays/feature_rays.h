@@ -38,6 +38,9 @@ enum class MeshFeature { edge, vertex };
 std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std::size_t n, double distance,
                               std::uint64_t seed);
 
+/// weld[i] = the smallest vertex index with the same position as vertex i.
+std::vector<std::uint32_t> weld_vertices(const TriangleMesh& mesh);
+
 /// A ray exactly through `p`: its direction is `w` with every component rounded to 8 significant
 /// bits (components below 2^-8 of the largest set to 0), its origin p - 2^k·d with the smallest
 /// k >= log2(distance / |w|) (up to 40 more) for which every coordinate is a float, so that

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
-#include <tuple>
+
+#include "rays/feature_rays.h"
 
 namespace raylab {
 namespace {
@@ -122,18 +122,7 @@ double point_triangle_distance(const Vec3d& p, const Vec3d& a, const Vec3d& b, c
 
 }  // namespace
 
-MeshAdjacency::MeshAdjacency(const TriangleMesh& mesh) : weld_(mesh.vertices.size()) {
-  std::vector<std::uint32_t> order(mesh.vertices.size());
-  std::iota(order.begin(), order.end(), 0u);
-  const auto key = [&](std::uint32_t i) {
-    const Vec3f& v = mesh.vertices[i];
-    return std::make_tuple(v.x, v.y, v.z, i);
-  };
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const bool same = k > 0 && mesh.vertices[order[k]] == mesh.vertices[order[k - 1]];
-    weld_[order[k]] = same ? weld_[order[k - 1]] : order[k];
-  }
+MeshAdjacency::MeshAdjacency(const TriangleMesh& mesh) : weld_(weld_vertices(mesh)) {
   for (std::uint32_t t = 0; t < mesh.size(); ++t)
     for (int c = 0; c < 3; ++c) {
       const std::uint32_t a = weld_[mesh.triangles[t][c]], b = weld_[mesh.triangles[t][(c + 1) % 3]];
