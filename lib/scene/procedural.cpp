@@ -373,12 +373,9 @@ Scene make_transformed(const Scene& of, const TransformedConfig& c) {
                              AffineTransform::rotation(c.axis, c.degrees * std::numbers::pi / 180.0) *
                              AffineTransform::scaling(Vec3d(c.scale));
   Scene s;
-  if (of.instanced()) {
-    s.base = of.base;
-    s.instances.reserve(of.instances.size());
-    for (const auto& inst : of.instances) s.instances.push_back(xf * inst);
-    return s;
-  }
+  s.bases = of.bases;
+  s.instances.reserve(of.instances.size());
+  for (const auto& inst : of.instances) s.instances.push_back({xf * inst.transform, inst.base});
   s.mesh = of.mesh;
   for (auto& v : s.mesh.vertices) v = xf.apply_point(v);
   s.spheres.reserve(of.spheres.size());

@@ -114,7 +114,7 @@ Scene make_instances(std::shared_ptr<const Scene> base, const InstancesConfig& c
 /// similarity p -> translate + scale·R(AXIS, DEG)·p, so that "far from the origin" (translate
 /// 1e6:0:0) and "tiny" (scale=1e-6) are one spec away. AXIS is x, y, z or a vector a;b;c (not 0).
 /// The transform is applied in double to every vertex and sphere centre, then rounded to float
-/// (radius: scale·radius rounded); an instanced scene keeps its base and composes the transform
+/// (radius: scale·radius rounded); an instanced scene keeps its bases and composes the transform
 /// with every instance's. scale in [1e-30, 1e30], default 1; DEG default 0; translate default 0.
 struct TransformedConfig {
   Vec3d axis{0.0, 0.0, 1.0};

@@ -82,13 +82,11 @@ HitComparison compare_hits_exact(const Scene& scene, const std::vector<Ray>& ray
   check_sizes(rays.size(), hits.size(), reference.size(), classes, "compare_hits_exact");
   std::shared_ptr<const Scene> flat_owner;
   const Scene* flat = &scene;
-  unsigned per_instance = 0;
   if (scene.instanced()) {
     flat_owner = flatten_instances(scene);
     flat = flat_owner.get();
-    per_instance = static_cast<unsigned>(scene.base->primitive_count());
   }
-  auto flat_id = [&](const Hit& h) { return scene.instanced() ? h.instance * per_instance + h.prim : h.prim; };
+  auto flat_id = [&](const Hit& h) { return scene.instanced() ? flat_primitive_id(scene, h) : h.prim; };
   const FloatModeScope ieee(false);
   HitComparison c;
   c.rays = rays.size();

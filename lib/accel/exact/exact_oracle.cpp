@@ -262,6 +262,23 @@ std::shared_ptr<const Scene> flatten_instances(const Scene& scene) {
   return flat;
 }
 
+unsigned flat_primitive_id(const Scene& scene, const Hit& hit) {
+  // flatten_instances' order: triangles of the flat geometry, then of instance 0, 1, ...; then
+  // the spheres in the same order.
+  const auto part = [&](std::size_t k) -> const Scene& { return k == 0 ? scene : scene.base_of(k - 1); };
+  const std::size_t parts = scene.instances.size() + 1;
+  const std::size_t own = hit.instance == kInvalidId ? 0 : std::size_t(hit.instance) + 1;
+  const Scene& mine = part(own);
+  std::size_t id = 0;
+  if (hit.prim < mine.mesh.size()) {
+    for (std::size_t k = 0; k < own; ++k) id += part(k).mesh.size();
+    return static_cast<unsigned>(id + hit.prim);
+  }
+  for (std::size_t k = 0; k < parts; ++k) id += part(k).mesh.size();
+  for (std::size_t k = 0; k < own; ++k) id += part(k).spheres.size();
+  return static_cast<unsigned>(id + (hit.prim - mine.mesh.size()));
+}
+
 namespace {
 
 /// An accelerator built on flatten_instances(scene), reporting hits as (instance, prim) like

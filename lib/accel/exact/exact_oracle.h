@@ -27,6 +27,10 @@ std::unique_ptr<Aggregate> make_exact_oracle(std::shared_ptr<const Scene> scene)
 /// invalid instance (require_valid_instances), and for spheres under a non-uniform scale.
 std::shared_ptr<const Scene> flatten_instances(const Scene& scene);
 
+/// The id in flatten_instances(scene) of the primitive a hit on the instanced `scene` names
+/// (instance and primitive within its base, or a primitive of the flat geometry).
+unsigned flat_primitive_id(const Scene& scene, const Hit& hit);
+
 /// `make(flatten_instances(scene))`, reporting hits as (instance, prim) like instanced
 /// accelerators: how the oracle, and every accelerator with kernel=certified, answer for an
 /// instanced scene (the flat copy is the geometry the exact answer is defined on).
