@@ -22,9 +22,9 @@ namespace raylab {
 namespace {
 
 /// Scenes: random soups, closed meshes, spheres, the lecture's procedural cases, instances, a
-/// real CGAL mesh, `degenerate`, built by hand below, and `gltf-instances`, a glTF 2.0 file
+/// real CGAL mesh, `degenerate`, built by hand below, `gltf-instances`, a glTF 2.0 file
 /// written below and read through Assimp: several bases under several transforms (non-uniform
-/// scales among them) beside flat geometry.
+/// scales among them) beside flat geometry, and the scenes where log N fails.
 const std::vector<std::string> kScenes = {
     "soup:n=3000",
     "sphere:n=2000",
@@ -37,6 +37,11 @@ const std::vector<std::string> kScenes = {
     "decimated:of=cgal:bunny00,faces=4000",
     "degenerate",
     "gltf-instances",
+    // The scenes where log N fails (procedural.h), small.
+    "dust:n=2000",
+    "needles:n=256",
+    "fan:n=256",
+    "row:n=256",
 };
 
 const std::vector<std::string> kRaySpecs = {"primary:4096", "diffuse:2048", "shadow:2048",
