@@ -275,32 +275,48 @@ int main(int argc, char** argv) {
     }
     md += "\n![the failing families](image_log_objects_failures.png)\n\n";
 
-    const Verdict main_verdict{
-        "1", "|Image| × log|Objects|", "holds only under stated conditions",
-        fmt::format("ops/ray ∝ N^α with median α = {:.2f} (largest {:.2f}) over the hierarchies on soups, meshes and "
-                    "spheres; brute force: tests {}, time {}",
-                    median_alpha, max_alpha, exponent_text(brute_soup_ops), exponent_text(brute_soup)),
-        "claim-1"};
-    verdicts.push_back(main_verdict);
-    md += verdict_paragraph(main_verdict,
-                            "Brute force is linear in N, as claimed (its time a little faster than linear as the "
-                            "triangles outgrow the caches). The hierarchies' work grows far slower than N on "
-                            "soups of evenly spread triangles, on real meshes and on the sphereflake, where a + b·log2 N "
-                            "describes it as well as a small power; their time grows faster than their operations as "
-                            "the structures outgrow the caches. The claim fails on the four families below.");
     const std::map<std::string, std::string> failure_titles = {
         {"dust", "log N for rays that escape (dust)"},
         {"needles", "log N among overlapping needles"},
         {"fan", "log N at a vertex of valence N (fan)"},
         {"row", "log N along a near-miss row"}};
     const std::map<std::string, std::string> ids = {{"dust", "1b"}, {"needles", "1c"}, {"fan", "1d"}, {"row", "1e"}};
+    std::vector<Verdict> failure_verdicts;
+    int refuting = 0;
     for (const auto& fam : fams) {
       if (!fam.failure || !worst.count(fam.name)) continue;
       const auto& [accel, pow] = worst[fam.name];
       const bool fails = pow.values[1] - 2 * pow.std_errors[1] > 0.1;
-      verdicts.push_back({ids.at(fam.name), failure_titles.at(fam.name), fails ? "refuted" : "confirmed",
-                          fmt::format("ops/ray ∝ N^α, {} (`{}`)", exponent_text(pow), accel), "claim-1"});
+      refuting += fails;
+      failure_verdicts.push_back({ids.at(fam.name), failure_titles.at(fam.name), fails ? "refuted" : "confirmed",
+                                  fmt::format("ops/ray ∝ N^α, {} (`{}`)", exponent_text(pow), accel), "claim-1"});
     }
+    // The claim proper: brute force's tests grow linearly (α within 0.1 of 1, or within two
+    // standard errors), and every hierarchy's operations grow far slower (largest α below 0.5).
+    const bool brute_linear = std::abs(brute_soup_ops.values[1] - 1.0) <= std::max(0.1, 2 * brute_soup_ops.std_errors[1]);
+    const bool trees_sublinear = !tree_alphas.empty() && max_alpha < 0.5;
+    const Verdict main_verdict{
+        "1", "|Image| × log|Objects|",
+        !(brute_linear && trees_sublinear) ? "refuted"
+                                           : (refuting ? "holds only under stated conditions" : "confirmed"),
+        fmt::format("ops/ray ∝ N^α with median α = {:.2f} (largest {:.2f}) over the hierarchies on soups, meshes and "
+                    "spheres; brute force: tests {}, time {}",
+                    median_alpha, max_alpha, exponent_text(brute_soup_ops), exponent_text(brute_soup)),
+        "claim-1"};
+    verdicts.push_back(main_verdict);
+    verdicts.insert(verdicts.end(), failure_verdicts.begin(), failure_verdicts.end());
+    const double brute_ns_alpha = brute_soup.values[1];
+    md += verdict_paragraph(
+        main_verdict,
+        fmt::format("Brute force's tests per ray grow {} (α = {:.2f}), its time with α = {:.2f} ({}). The hierarchies' "
+                    "operations grow {} on soups of evenly spread triangles, on real meshes and on the sphereflake "
+                    "(largest α = {:.2f}). {} of the four families below refute{} the claim.",
+                    brute_linear ? "linearly in N, as claimed" : "not linearly in N", brute_soup_ops.values[1],
+                    brute_ns_alpha,
+                    brute_ns_alpha > brute_soup_ops.values[1] ? "faster than its tests: the triangles outgrow the caches"
+                                                              : "no faster than its tests",
+                    trees_sublinear ? "far slower than N" : "not much slower than N", max_alpha,
+                    refuting == 0 ? std::string("None") : std::to_string(refuting), refuting == 1 ? "s" : ""));
     md += "| claim | on | verdict | the largest exponent |\n|---|---|---|---|\n";
     for (std::size_t i = 1; i < verdicts.size(); ++i)
       md += fmt::format("| {} | {} | **{}** | {} |\n", verdicts[i].claim, verdicts[i].title, verdicts[i].verdict, verdicts[i].key);
@@ -367,20 +383,25 @@ int main(int argc, char** argv) {
          "| Aronov, de Berg and Gray 2008 | O(n^(2+ε)) | O(log² n) | fat convex polyhedra |\n"
          "| brute force | O(n) | O(n) | anything |\n\n";
     b += "![query cost against memory](ray_shooting_bounds.png)\n\n";
-    const Verdict v5{"5", "O(log n) query needs n^(5+ε) space (Pellegrini)", "holds only under stated conditions",
+    // Practice refutes the need for n^(5+ε) space only if its near-linear structures kept the query
+    // cost logarithmic on the worst cases too; where those grow as a power, the guarantee is what
+    // the space buys.
+    const Verdict v5{"5", "O(log n) query needs n^(5+ε) space (Pellegrini)",
+                     worst_alpha > 0.1 ? "holds only under stated conditions" : "refuted",
                      fmt::format("the lab's structures use memory ∝ n^β, β = {:.2f} … {:.2f} on benign scenes, and "
                                  "query cost logarithmic there; on the worst cases the query cost grows as a power "
                                  "(largest: {}) and so may the memory ({})",
                                  betas.empty() ? 0.0 : betas.front(), betas.empty() ? 0.0 : betas.back(), worst_case,
                                  worst_beta_case),
                      "claim-5"};
-    b += verdict_paragraph(v5,
-                           "The bounds are worst-case guarantees; the lab's structures give none. They buy memory "
-                           "linear in n (n^5 bytes would be 10^15 at n = 1000) and logarithmic queries wherever the "
-                           "scene is benign, and they give up every guarantee: on the worst-case families the query "
-                           "cost grows as a power of n, up to linearly, where Pellegrini's structure would still answer "
-                           "in O(log n). Whether a guaranteed structure with near-linear space exists is open; the "
-                           "known trade-offs (Agarwal and Matoušek 1993) interpolate between the two ends.");
+    b += verdict_paragraph(
+        v5, fmt::format("The bounds are worst-case guarantees; the lab's structures give none. They buy memory ∝ n^β "
+                        "with β = {:.2f} … {:.2f} on benign scenes (n^5 bytes would be 10^15 at n = 1000) and "
+                        "near-logarithmic queries there, and they give up every guarantee: on the worst-case families "
+                        "the query cost grows as a power of n, up to α = {:.2f}, where Pellegrini's structure would "
+                        "still answer in O(log n). Whether a guaranteed structure with near-linear space exists is "
+                        "open; the known trade-offs (Agarwal and Matoušek 1993) interpolate between the two ends.",
+                        betas.empty() ? 0.0 : betas.front(), betas.empty() ? 0.0 : betas.back(), worst_alpha));
     b += fmt::format("Data: image_log_objects.csv (the bytes column), fits: image_log_objects_fits.csv (quantity "
                      "`bytes`). Measured by `build/experiments/exp_image_log_objects --mode {}`. {}.\n",
                      opt.mode, provenance());

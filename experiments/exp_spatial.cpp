@@ -270,11 +270,15 @@ int main(int argc, char** argv) {
                                   format_with_error(slope_fits["events"].values[1], slope_fits["events"].std_errors[1]),
                                   exponent_text(power_fits["sort"]), exponent_text(power_fits["events"])),
                       "claim-4"};
-      md += verdict_paragraph(v, "The sort sweep's cost per N log N grows with log N, as the extra log factor says; "
-                                 "the event sweep's grows far less (its constant is the presort and the classification "
-                                 "of events at each level). Over a range of 2^12 … 2^" + std::to_string(max_log) +
-                                 " both still look like powers close to 1: log N varies by only a factor " +
-                                 fmt::format("{:.1f}", max_log / 12.0) + " here.");
+      md += verdict_paragraph(
+          v, fmt::format("The sort sweep's cost per N log2 N {} with log N (b = {:.2f} ns per doubling); the event "
+                         "sweep's {} (b = {:.2f} ns; its constant is the presort and the classification of events at "
+                         "each level). Over 2^12 … 2^{} both still look like powers close to 1 (α = {:.3f} and "
+                         "{:.3f}): log N varies by only a factor {:.1f} here.",
+                         sort_log2 ? "grows significantly" : "does not grow significantly",
+                         slope_fits["sort"].values[1],
+                         events_log ? "grows far less or not at all" : "grows as much", slope_fits["events"].values[1],
+                         max_log, power_fits["sort"].values[1], power_fits["events"].values[1], max_log / 12.0));
       write_verdicts(opt.out, "spatial", {v});
     }
 
