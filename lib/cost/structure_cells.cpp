@@ -33,47 +33,51 @@ StructureCell leaf_cell(const Bounds3f& box, std::size_t primitives, int depth, 
   return c;
 }
 
+/// Depth-first, with an explicit stack: `step(item, stack)` visits one item and pushes the items
+/// of its children (the first popped is the last pushed).
+template <class Item, class Step>
+void depth_first(Item root, const Step& step) {
+  std::vector<Item> stack;
+  stack.push_back(std::move(root));
+  while (!stack.empty()) {
+    Item it = std::move(stack.back());
+    stack.pop_back();
+    step(it, stack);
+  }
+}
+
+/// A node of a tree whose cells are boxes, as the walk carries it.
+struct BoxItem {
+  std::uint32_t node;
+  Bounds3f box;
+  int depth;
+};
+
 void walk_kdtree(const KdTree& tree, const Visit& visit) {
   const KdTreeData& d = tree.data();
-  struct Item {
-    std::uint32_t node;
-    Bounds3f box;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, d.bounds, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
+  depth_first(BoxItem{0, d.bounds, 0}, [&](const BoxItem& it, std::vector<BoxItem>& stack) {
     const KdNode& n = d.nodes[it.node];
     if (n.is_leaf()) {
       visit(leaf_cell(it.box, n.count(), it.depth));
-      continue;
+      return;
     }
-    if (!visit(box_cell(it.box, it.depth))) continue;
-    todo.push_back({n.above_child(), it.box.above(n.axis(), n.split), it.depth + 1});
-    todo.push_back({it.node + 1, it.box.below(n.axis(), n.split), it.depth + 1});
-  }
+    if (!visit(box_cell(it.box, it.depth))) return;
+    stack.push_back({n.above_child(), it.box.above(n.axis(), n.split), it.depth + 1});
+    stack.push_back({it.node + 1, it.box.below(n.axis(), n.split), it.depth + 1});
+  });
 }
 
 void walk_octree(const Octree& tree, const Visit& visit) {
   const OctreeData& d = tree.data();
-  struct Item {
-    std::uint32_t node;
-    Bounds3f box;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, d.bounds, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
+  depth_first(BoxItem{0, d.bounds, 0}, [&](const BoxItem& it, std::vector<BoxItem>& stack) {
     const OctNode& n = d.nodes[it.node];
     if (n.is_leaf()) {
       visit(leaf_cell(it.box, n.count, it.depth));
-      continue;
+      return;
     }
-    if (!visit(box_cell(it.box, it.depth))) continue;
-    for (unsigned i = 0; i < 8; ++i) todo.push_back({n.first + i, octree_child_box(it.box, i), it.depth + 1});
-  }
+    if (!visit(box_cell(it.box, it.depth))) return;
+    for (unsigned i = 0; i < 8; ++i) stack.push_back({n.first + i, octree_child_box(it.box, i), it.depth + 1});
+  });
 }
 
 void walk_bsp(const BspTree& tree, const Visit& visit) {
@@ -83,11 +87,7 @@ void walk_bsp(const BspTree& tree, const Visit& visit) {
     ConvexCell cell;
     int depth;
   };
-  std::vector<Item> todo;
-  todo.push_back({0, ConvexCell(d.bounds), 0});
-  while (!todo.empty()) {
-    Item it = std::move(todo.back());
-    todo.pop_back();
+  depth_first(Item{0, ConvexCell(d.bounds), 0}, [&](Item& it, std::vector<Item>& stack) {
     const BspNode& n = d.nodes[it.node];
     StructureCell c;
     c.polytope = &it.cell;
@@ -95,7 +95,7 @@ void walk_bsp(const BspTree& tree, const Visit& visit) {
     c.depth = it.depth;
     c.leaf = n.is_leaf();
     c.primitives = c.leaf ? n.count : 0;
-    if (!visit(c) || c.leaf) continue;
+    if (!visit(c) || c.leaf) return;
     BspPlane plane;
     plane.normal = {n.normal[0], n.normal[1], n.normal[2]};
     plane.origin = {n.origin[0], n.origin[1], n.origin[2]};
@@ -103,9 +103,9 @@ void walk_bsp(const BspTree& tree, const Visit& visit) {
     plane.scale = n.scale;
     ConvexCell negative, positive;
     it.cell.split(plane, negative, positive);
-    todo.push_back({n.index, std::move(positive), it.depth + 1});
-    todo.push_back({it.node + 1, std::move(negative), it.depth + 1});
-  }
+    stack.push_back({n.index, std::move(positive), it.depth + 1});
+    stack.push_back({it.node + 1, std::move(negative), it.depth + 1});
+  });
 }
 
 void walk_bvh2(const Bvh2& tree, const Visit& visit) {
@@ -113,43 +113,33 @@ void walk_bvh2(const Bvh2& tree, const Visit& visit) {
     std::uint32_t node;
     int depth;
   };
-  std::vector<Item> todo = {{0, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
+  depth_first(Item{0, 0}, [&](const Item& it, std::vector<Item>& stack) {
     const Bvh2Node& n = tree.nodes[it.node];
     if (n.is_leaf()) {
       visit(leaf_cell(n.box, n.count, it.depth));
-      continue;
+      return;
     }
-    if (!visit(box_cell(n.box, it.depth))) continue;
-    todo.push_back({n.first, it.depth + 1});
-    todo.push_back({n.first + 1, it.depth + 1});
-  }
+    if (!visit(box_cell(n.box, it.depth))) return;
+    stack.push_back({n.first, it.depth + 1});
+    stack.push_back({n.first + 1, it.depth + 1});
+  });
 }
 
+/// The nodes of a wide BVH are references (WideRef): a leaf's names its packets.
 template <int N>
 void walk_wide_bvh(const WideBvh<N>& wide, const Visit& visit) {
-  struct Item {
-    std::uint32_t ref;
-    Bounds3f box;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, wide.root_box, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
-    if (WideRef::is_leaf(it.ref)) {
+  depth_first(BoxItem{0, wide.root_box, 0}, [&](const BoxItem& it, std::vector<BoxItem>& stack) {
+    if (WideRef::is_leaf(it.node)) {
       std::size_t prims = 0;
-      const std::uint32_t first = WideRef::first(it.ref);
-      for (std::uint32_t p = first; p < first + WideRef::count(it.ref); ++p) prims += wide.packets[p].size();
-      visit(leaf_cell(it.box, prims, it.depth, WideRef::count(it.ref)));  // one group per packet
-      continue;
+      const std::uint32_t first = WideRef::first(it.node);
+      for (std::uint32_t p = first; p < first + WideRef::count(it.node); ++p) prims += wide.packets[p].size();
+      visit(leaf_cell(it.box, prims, it.depth, WideRef::count(it.node)));  // one group per packet
+      return;
     }
-    const WideBvhNode<N>& node = wide.nodes[it.ref];
-    if (!visit(box_cell(it.box, it.depth))) continue;
-    for (std::uint32_t i = 0; i < node.used; ++i) todo.push_back({node.child[i], node.box(static_cast<int>(i)), it.depth + 1});
-  }
+    const WideBvhNode<N>& node = wide.nodes[it.node];
+    if (!visit(box_cell(it.box, it.depth))) return;
+    for (std::uint32_t i = 0; i < node.used; ++i) stack.push_back({node.child[i], node.box(static_cast<int>(i)), it.depth + 1});
+  });
 }
 
 void walk_bvh(const Bvh& bvh, const Visit& visit) {
