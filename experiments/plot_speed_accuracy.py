@@ -61,7 +61,7 @@ def plot(out: pathlib.Path) -> None:
         ax.set_xticks(ticks)
         ax.set_xticklabels(["0"] + [f"{t:g}" for t in ticks[1:]])
         ax.axhline(1.0, color="black", linewidth=0.6, linestyle=":")
-        ax.set_xlabel("error rate: rays whose closest hit differs from the exact oracle (shaded band: none)")
+        ax.set_xlabel("error rate: share of rays whose closest hit differs from `exact` (grey band: no error)", fontsize=9)
         ax.set_ylabel("throughput relative to Embree (1 thread, same rays)")
         ax.set_title(f"{fam}: {g['scene'].iloc[0]}", fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
