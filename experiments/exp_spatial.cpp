@@ -281,6 +281,10 @@ int main(int argc, char** argv) {
       const FitResult rf = fit_basis(logs, ratio, [](double x) { return x; });
       const FitResult kf = fit_linear_terms(log_column, ratio);
       build_fits.row("sort/events", "time_ratio", "linear", rf, logs);
+      FitResult proportional = kf;  // k·log2 N as the linear curve 0 + k·x, for the plot
+      proportional.values = {0.0, kf.values[0]};
+      proportional.std_errors = {0.0, kf.std_errors[0]};
+      build_fits.row("sort/events", "time_ratio_if_nlog2n", "linear", proportional, logs);
       const double se = std::max(rf.std_errors[1], 1e-12), k = kf.values[0];
       const double z_flat = std::abs(rf.values[1]) / se, z_log = std::abs(rf.values[1] - k) / se;
       const int resolved = z_log <= 2 && z_flat > 2 ? 1 : (z_flat <= 2 && z_log > 2 ? -1 : 0);

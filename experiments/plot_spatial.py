@@ -72,10 +72,38 @@ def plot(out: pathlib.Path) -> None:
         ax.set_title("kd-tree build time: sort vs events", fontsize=9)
         ax.legend(fontsize=6)
         ax.grid(True, which="both", alpha=0.3)
+        # The verdict's test: t(sort)/t(events) against log2 N, with its fit and the curve an extra
+        # log factor in the sort would give (k·log2 N, fitted by the experiment).
+        sort = b[b["param"] == "sort"].sort_values("triangles")
+        events = b[b["param"] == "events"].sort_values("triangles")
+        qx = rx.twinx()
+        if len(sort) and len(sort) == len(events):
+            n = sort["triangles"].to_numpy(float)
+            ratio = sort["build_s"].to_numpy(float) / events["build_s"].to_numpy(float)
+            qx.plot(np.log2(n), ratio, marker="D", linestyle="none", color="black", label="t(sort) / t(events)")
+            row = fit_row(fits, "sort/events", "time_ratio", "linear")
+            if row is not None:
+                xs = np.linspace(row["x_min"], row["x_max"], 20)
+                qx.plot(xs, row["a"] + row["b"] * xs, color="black", linewidth=1,
+                        label=f"ratio: fit a + b·log2 N, b = {row['b']:.3f} ± {row['b_se']:.3f}")
+            top = ratio.max()
+            krow = fit_row(fits, "sort/events", "time_ratio_if_nlog2n", "linear")
+            if krow is not None:
+                xs = np.linspace(krow["x_min"], krow["x_max"], 20)
+                qx.plot(xs, krow["b"] * xs, color="black", linestyle="--", linewidth=1,
+                        label="ratio if the sort were N log² N: k·log2 N (fit)")
+                top = max(top, krow["b"] * xs.max())
+            qx.set_ylim(0, top * 1.2)
+        qx.set_ylabel("t(sort) / t(events)")
         rx.set_xlabel("log2 N")
         rx.set_ylabel("build time / (N log2 N)  (ns)")
-        rx.set_title("flat for N log N, rising for N log² N", fontsize=9)
-        rx.legend(fontsize=6)
+        rx.set_title("per N log N (colours) and the ratio of the builds (black)", fontsize=9)
+        handles, labels = [], []
+        for a in (rx, qx):
+            h, lab = a.get_legend_handles_labels()
+            handles += h
+            labels += lab
+        rx.legend(handles, labels, fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=1)
         rx.grid(True, alpha=0.3)
     c = df[df["part"] == "clip"]
     if len(c):
@@ -113,5 +141,5 @@ def plot(out: pathlib.Path) -> None:
         if not ax.has_data():
             ax.set_visible(False)
     fig.tight_layout()
-    fig.savefig(out / "spatial.png", dpi=110)
+    fig.savefig(out / "spatial.png", dpi=110, bbox_inches="tight")
     plt.close(fig)
