@@ -96,14 +96,21 @@ class Runner {
   }
 
   /// Builds `accel_spec` on the scene, traces the rays counted and timed, and writes a CSV row.
+  /// `build_repeats` > 0: the build runs on this thread and is timed in its CPU time, best of that
+  /// many builds; 0: one build, wall clock (Embree builds on its own threads).
   Measured run(const std::string& part, const std::string& scene_spec, const std::string& ray_spec,
-               const std::string& accel_spec, const std::string& param, bool trace = true) {
+               const std::string& accel_spec, const std::string& param, bool trace = true, int build_repeats = 0) {
     progress("spatial: " + part + " " + scene_spec + " " + accel_spec);
     Measured m;
     const auto s = scene(scene_spec);
     m.triangles = s->mesh.size();
     std::unique_ptr<Aggregate> accel;
-    m.build_s = seconds_of([&] { accel = make_accelerator(accel_spec, s); });
+    const auto build = [&] { accel = make_accelerator(accel_spec, s); };
+    m.build_s = build_repeats > 0 ? thread_cpu_seconds_of(build) : seconds_of(build);
+    for (int rep = 1; rep < build_repeats; ++rep) {
+      accel.reset();
+      m.build_s = std::min(m.build_s, thread_cpu_seconds_of(build));
+    }
     m.stats = accel->stats();
     const auto& r = rays(scene_spec, ray_spec);
     if (trace) {
@@ -198,35 +205,115 @@ int main(int argc, char** argv) {
       md += row(mesh + ", " + p, m);
     }
 
-    // 3. Build complexity of the two sweeps.
-    md += "\n### Build complexity: sort against event sweep\n\n";
+    // 3. Build complexity of the two sweeps (claim 4).
+    md += "\n" + section_anchor("claim-4") + "### Build complexity: sort against event sweep\n\n";
     const int max_log = opt.full() ? 22 : 18;
     std::map<std::string, std::vector<double>> ns, ts;
-    for (int k = 12; k <= max_log; k += (opt.full() ? 1 : 2)) {
+    for (int k = 12; k <= max_log; ++k) {
       const std::string s = fmt::format("sphere:n={}", 1 << k);
       for (const std::string sw : {"sort", "events"}) {
-        const Measured m = run.run("build", s, "primary:16", "kdtree:sweep=" + sw, sw, false);
+        // Best of 3 builds up to 2^16 triangles (a few seconds at most), one beyond.
+        const Measured m = run.run("build", s, "primary:16", "kdtree:sweep=" + sw, sw, false, k <= 16 ? 3 : 1);
         ns[sw].push_back(static_cast<double>(m.triangles));
         ts[sw].push_back(m.build_s);
       }
       const Measured e = run.run("build", s, "primary:16", "embree", "embree", false);
       ts["embree"].push_back(e.build_s);
     }
-    md += "Build time of the SAH kd-tree (exact clipping) on tessellated spheres of N = 2^12 … 2^" +
-          std::to_string(max_log) + " triangles, least-squares fits t = a + b·f(N):\n\n";
-    md += "Fits with Ceres (lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error.\n\n";
-    md += "| sweep | fit | a (s) | b (ns) | R² |\n|---|---|---|---|---|\n";
+    md += "**Claim** (lecture, *Sweep build algorithm*): sorting the candidate splits at every node gives "
+          "T(N) = N log N + 2T(N/2) = N log² N; sweeping presorted events gives N log N. **Source**: I. Wald and "
+          "V. Havran, \"On building fast kd-trees for ray tracing, and on doing that in O(N log N)\", *IEEE Symposium "
+          "on Interactive Ray Tracing* 2006, pp. 61–69 (see [docs/theory.md](../theory.md#claim-4)).\n\n";
+    md += "**Experiment**: build time of the SAH kd-tree (exact clipping, single thread; CPU time of the building "
+          "thread, best of 3 builds up to 2^16 triangles) on tessellated spheres of "
+          "N = 2^12 … 2^" + std::to_string(max_log) + " triangles, every power of two, with `sweep=sort` and "
+          "`sweep=events`. Fits (Ceres, lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error: "
+          "t = a + b·f(N) for f = N log N and N log² N, compared by their Akaike criteria (same number of parameters); "
+          "t = c·N^α; and the discriminating one, t / (N log2 N) = a + b·log2 N, whose slope b is 0 for an N log N "
+          "build and positive for an N log² N one. Command: `build/experiments/exp_spatial --mode " + opt.mode + "`.\n\n";
+    md += "| sweep | fit | a (s) | b (ns) | R² | AIC |\n|---|---|---|---|---|---|\n";
+    FitsCsv build_fits(opt.out + "/spatial_fits.csv");
+    std::map<std::string, FitResult> slope_fits, power_fits;
+    std::map<std::string, bool> log2_preferred;
     for (const std::string sw : {"sort", "events"}) {
       const FitResult f1 = fit_basis(ns[sw], ts[sw], [](double n) { return n * std::log2(n); });
       const FitResult f2 = fit_basis(ns[sw], ts[sw], [](double n) { return n * std::log2(n) * std::log2(n); });
+      build_fits.row(sw, "build_s", "nlogn", f1, ns[sw]);
+      build_fits.row(sw, "build_s", "nlog2n", f2, ns[sw]);
       for (const auto& [name, f] : {std::pair{"N log N", &f1}, std::pair{"N log² N", &f2}})
-        md += fmt::format("| {} | {} | {} | {} | {:.4f} |\n", sw, name, format_with_error(f->values[0], f->std_errors[0]),
-                          format_with_error(f->values[1] * 1e9, f->std_errors[1] * 1e9), f->r2);
+        md += fmt::format("| {} | {} | {} | {} | {:.4f} | {:.1f} |\n", sw, name, format_with_error(f->values[0], f->std_errors[0]),
+                          format_with_error(f->values[1] * 1e9, f->std_errors[1] * 1e9), f->r2, f->aic);
+      log2_preferred[sw] = f2.aic < f1.aic;
+      power_fits[sw] = fit_power_law(ns[sw], ts[sw]);
+      build_fits.row(sw, "build_s", "power", power_fits[sw], ns[sw]);
+      std::vector<double> logs, per;
+      for (std::size_t i = 0; i < ns[sw].size(); ++i) {
+        logs.push_back(std::log2(ns[sw][i]));
+        per.push_back(ts[sw][i] / (ns[sw][i] * std::log2(ns[sw][i])) * 1e9);
+      }
+      slope_fits[sw] = fit_basis(logs, per, [](double x) { return x; });
+      build_fits.row(sw, "ns_per_NlogN", "linear", slope_fits[sw], logs);
     }
+    md += "\n| sweep | t ∝ N^α | t/(N log2 N) = a + b·log2 N: a (ns) | b (ns) | N log² N fits better (AIC) |\n"
+          "|---|---|---|---|---|\n";
+    for (const std::string sw : {"sort", "events"})
+      md += fmt::format("| {} | {} | {} | {} | {} |\n", sw, exponent_text(power_fits[sw]),
+                        format_with_error(slope_fits[sw].values[0], slope_fits[sw].std_errors[0]),
+                        format_with_error(slope_fits[sw].values[1], slope_fits[sw].std_errors[1]),
+                        log2_preferred[sw] ? "yes" : "no");
     md += fmt::format("\nLargest N ({:.0f} triangles): sort {:.2f} s, events {:.2f} s, Embree (medium quality, its "
-                      "own threads) {:.3f} s; events/Embree = {:.0f}.\n",
+                      "own threads) {:.3f} s; events/Embree = {:.0f}.\n\n",
                       ns["events"].back(), ts["sort"].back(), ts["events"].back(), ts["embree"].back(),
                       ts["events"].back() / ts["embree"].back());
+    {
+      // The discriminating test: the ratio of the two builds' times on the same scene, which cancels
+      // what both share (the machine, the caches, the clipping). N log² N against N log N makes it
+      // k·log2 N; equal complexities make it constant. Fitted as a + b·log2 N, with k from the
+      // one-parameter fit ratio = k·log2 N: resolved when b lies within two standard errors of one
+      // of 0 and k and more than two away from the other.
+      std::vector<double> logs, ratio;
+      std::vector<std::vector<double>> log_column;
+      for (std::size_t i = 0; i < ns["sort"].size(); ++i) {
+        logs.push_back(std::log2(ns["sort"][i]));
+        log_column.push_back({logs.back()});
+        ratio.push_back(ts["sort"][i] / ts["events"][i]);
+      }
+      const FitResult rf = fit_basis(logs, ratio, [](double x) { return x; });
+      const FitResult kf = fit_linear_terms(log_column, ratio);
+      build_fits.row("sort/events", "time_ratio", "linear", rf, logs);
+      FitResult proportional = kf;  // k·log2 N as the linear curve 0 + k·x, for the plot
+      proportional.values = {0.0, kf.values[0]};
+      proportional.std_errors = {0.0, kf.std_errors[0]};
+      build_fits.row("sort/events", "time_ratio_if_nlog2n", "linear", proportional, logs);
+      const double se = std::max(rf.std_errors[1], 1e-12), k = kf.values[0];
+      const double z_flat = std::abs(rf.values[1]) / se, z_log = std::abs(rf.values[1] - k) / se;
+      const int resolved = z_log <= 2 && z_flat > 2 ? 1 : (z_flat <= 2 && z_log > 2 ? -1 : 0);
+      md += fmt::format("Build time of `sweep=sort` over `sweep=events` on the same scene, against log2 N: {:.2f} at "
+                        "N = {:.0f} … {:.2f} at N = {:.0f}; fit a + b·log2 N: a = {}, b = {} per doubling (an extra log "
+                        "factor in the sort would give b = {:.3f}, equal complexities b = 0).\n\n",
+                        ratio.front(), ns["sort"].front(), ratio.back(), ns["sort"].back(),
+                        format_with_error(rf.values[0], rf.std_errors[0]), format_with_error(rf.values[1], rf.std_errors[1]), k);
+      const Verdict v{"4", "build: N log² N (sort) against N log N (events)",
+                      resolved > 0 ? "confirmed" : (resolved < 0 ? "refuted" : "holds only under stated conditions"),
+                      fmt::format("t(sort)/t(events) = a + b·log2 N: b = {} per doubling (N log² N against N log N: "
+                                  "{:.3f}; equal: 0); t ∝ N^α: sort {}, events {}",
+                                  format_with_error(rf.values[1], rf.std_errors[1]), k, exponent_text(power_fits["sort"]),
+                                  exponent_text(power_fits["events"])),
+                      "claim-4"};
+      md += verdict_paragraph(
+          v, fmt::format("The ratio of the two builds' times {} (b is {:.1f} standard errors from 0 and {:.1f} from the "
+                         "N log² N slope). Each build alone is dominated by what both share: its cost per N log2 N falls "
+                         "while per-node overheads amortise and rises once the tree outgrows the caches, so the slopes of "
+                         "t/(N log2 N) above (sort {}, events {} ns per doubling) do not separate them. Over 2^12 … 2^{} "
+                         "log N varies by only a factor {:.1f}{}.",
+                         resolved > 0   ? "grows with log N, as the sort's extra log factor says"
+                         : resolved < 0 ? "stays flat: over this range the sort costs a constant factor more, not a log factor"
+                                        : "is not resolved between the two hypotheses",
+                         z_flat, z_log, format_with_error(slope_fits["sort"].values[1], slope_fits["sort"].std_errors[1]),
+                         format_with_error(slope_fits["events"].values[1], slope_fits["events"].std_errors[1]), max_log,
+                         max_log / 12.0, opt.full() ? "" : "; `--full` extends the range to 2^22"));
+      write_verdicts(opt.out, "spatial", {v});
+    }
 
     // 4. Split clipping.
     md += "\n### Split clipping: none, bbox, exact (SAH kd-tree)\n\n";

@@ -30,19 +30,25 @@ def plot(out: pathlib.Path) -> None:
         ax.set_ylabel("ray/triangle tests per ray")
         ax2.set_ylabel("tests that hit (%)")
         ax.set_title("BVH vs kd-tree: tests and hit rate (pbrt: 4.75x tests, 4.1% vs 16%)", fontsize=9)
-        ax.legend(loc="upper left", fontsize=7)
-        ax2.legend(loc="upper right", fontsize=7)
+        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.08), fontsize=7)
+        ax2.legend(loc="lower right", bbox_to_anchor=(1.0, 1.08), fontsize=7)
 
     w = df[df["part"] == "walls"]
+    curves = pd.read_csv(out / "bvh_walls_fit.csv") if (out / "bvh_walls_fit.csv").exists() else None
     if len(w):
         ax = axes[0][1]
-        for accel, g in w.groupby("accel"):
-            g = g.sort_values("param")
-            ax.plot(g["param"].astype(float), g["ns_per_ray"], marker="o", label=accel)
+        cmap = plt.get_cmap("tab10")
+        for i, (accel, g) in enumerate(w.groupby("accel", sort=False)):
+            g = g.assign(angle=g["param"].astype(float)).sort_values("angle")
+            ax.plot(g["angle"], g["ns_per_ray"], marker="o", linestyle="none", color=cmap(i), label=accel)
+            if curves is not None:
+                c = curves[curves["accel"] == accel]
+                ax.plot(c["angle"], c["fitted_ns_per_ray"], color=cmap(i), linewidth=1,
+                        label=f"{accel}: fit a + b·(box growth)")
         ax.set_xlabel("wall rotation (degrees)")
         ax.set_ylabel("ns / ray (1 thread)")
         ax.set_title("rotated walls (pbrt: 4.19x slower rotated)", fontsize=9)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
         ax.grid(True, alpha=0.3)
 
     s = df[df["part"] == "shares"]
@@ -51,13 +57,14 @@ def plot(out: pathlib.Path) -> None:
         x = np.arange(len(s))
         ax.bar(x, 100 * s["traversal_share"], label="traversal (ours)")
         ax.bar(x, 100 * s["tri_share"], bottom=100 * s["traversal_share"], label="triangle tests (ours)")
-        lecture = [27.4 / (27.4 + 10.2), 42.7 / (42.7 + 13.3), 74.7 / (74.7 + 13.3)]
-        ax.plot(x, [100 * v for v in lecture[: len(s)]], "k^--", label="lecture: accel / (accel + tri)")
+        lecture = {3.02e5: 27.4 / (27.4 + 10.2), 4.83e6: 42.7 / (42.7 + 13.3), 3.11e9: 74.7 / (74.7 + 13.3)}
+        nearest = [min(lecture, key=lambda k: abs(np.log(k / n))) for n in s["triangles"]]
+        ax.plot(x, [100 * lecture[k] for k in nearest], "k^", label="lecture: accel / (accel + tri)")
         ax.set_xticks(x)
-        ax.set_xticklabels([f"{n:.3g} tris" for n in s["triangles"]], fontsize=8)
+        ax.set_xticklabels([f"{a}\n{n:.3g} tris" for a, n in zip(s["accel"], s["triangles"])], fontsize=7)
         ax.set_ylabel("% of ray-shooting time")
-        ax.set_title("where time goes as scenes grow (bvh, diffuse rays)", fontsize=9)
-        ax.legend(fontsize=7)
+        ax.set_title("where time goes as scenes grow (diffuse rays)", fontsize=9)
+        ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.08), ncol=3)
 
     p = df[(df["part"] == "speed") & (df["threads"] == 1)]
     if len(p):
@@ -68,7 +75,8 @@ def plot(out: pathlib.Path) -> None:
         ax.axvline(1.0, color="k", linewidth=1)
         ax.set_xlabel("throughput relative to Embree (1 thread)")
         ax.set_title("against Embree", fontsize=9)
-        ax.legend(fontsize=7)
+        ax.set_ylabel("scene, rays")
+        ax.legend(fontsize=7, loc="lower right", bbox_to_anchor=(1.0, 1.02), ncol=3)
     fig.tight_layout()
     fig.savefig(out / "bvh.png", dpi=110)
     plt.close(fig)

@@ -1,5 +1,6 @@
-"""Plot of exp_image_log_objects: per-ray time against triangle count, brute force and Embree,
-with the fits a + b·N and a + b·log2 N."""
+"""Plots of exp_image_log_objects: operations and time per ray against N for every structure (claim 1),
+the families where log N fails, and query cost against memory (claim 5). Fitted curves come from
+image_log_objects_fits.csv."""
 import pathlib
 
 import matplotlib
@@ -9,36 +10,108 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from figures import draw_fit, fit_row, legend_outside, read_fits  # noqa: E402
+
+BENIGN = ["soup", "bunny", "sphereflake"]
+FAILING = ["dust", "needles", "fan", "row"]
+TITLES = {"soup": "random triangles (soup)", "bunny": "the bunny, decimated / subdivided",
+          "sphereflake": "sphereflake (spheres)", "dust": "dust: rays escape", "needles": "needles: boxes overlap",
+          "fan": "fan: a vertex of valence N", "row": "row: near misses along the ray"}
+
+
+def _colors(accels):
+    cmap = plt.get_cmap("tab10")
+    return {a: cmap(i % 10) for i, a in enumerate(accels)}
+
+
+def _panel(ax, df, fits, family, quantity, colors, fit_model):
+    g = df[df["family"] == family]
+    for accel, h in g.groupby("accel", sort=False):
+        h = h.sort_values("primitives")
+        y = h[quantity].to_numpy(float)
+        if not (y > 0).any():
+            continue
+        ax.plot(h["primitives"], y, marker="o", markersize=3, linestyle="none", color=colors[accel], label=accel)
+        model = fit_model
+        if accel == "brute":
+            model = "linear" if quantity == "ns_per_ray" else "power"
+        draw_fit(ax, fit_row(fits, f"{family}|{accel}", quantity, model), colors[accel])
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log")
+    ax.set_xlabel("primitives N")
+    ax.grid(True, which="both", alpha=0.3)
+
 
 def plot(out: pathlib.Path) -> None:
     csv = out / "image_log_objects.csv"
     if not csv.exists():
         return
     df = pd.read_csv(csv)
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    markers = {"brute": "o", "embree": "s"}
-    for (family, accel), g in df.groupby(["family", "accel"]):
-        g = g.sort_values("triangles")
-        n = g["triangles"].to_numpy(float)
-        y = g["ns_per_ray"].to_numpy(float)
-        line, = ax.plot(n, y, marker=markers.get(accel, "x"), linestyle="none", label=f"{accel}, {family}")
-        if accel == "brute":
-            alpha, log_c = np.polyfit(np.log(n), np.log(y), 1)
-            xs = np.geomspace(n.min(), n.max(), 50)
-            ax.plot(xs, np.exp(log_c) * xs ** alpha, color=line.get_color(), linewidth=1,
-                    label=f"fit {np.exp(log_c):.2f}·N^{alpha:.2f}")
-        else:
-            b, a = np.polyfit(np.log2(n), y, 1)
-            xs = np.geomspace(n.min(), n.max(), 50)
-            ax.plot(xs, a + b * np.log2(xs), color=line.get_color(), linewidth=1,
-                    label=f"fit {a:.0f} + {b:.1f}·log2 N")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("triangles N")
-    ax.set_ylabel("ns per ray (1 thread)")
-    ax.set_title("Brute force grows like N, Embree like log N")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "image_log_objects.png", dpi=120)
-    plt.close(fig)
+    fits = read_fits(out / "image_log_objects_fits.csv")
+    colors = _colors(list(dict.fromkeys(df["accel"])))
+
+    fams = [f for f in BENIGN if f in set(df["family"])]
+    if fams:
+        fig, axes = plt.subplots(2, len(fams), figsize=(5.2 * len(fams), 9), squeeze=False)
+        for j, fam in enumerate(fams):
+            _panel(axes[0][j], df, fits, fam, "ops_per_ray", colors, "log")
+            axes[0][j].set_ylabel("operations per ray (node + leaf visits + tests)")
+            axes[0][j].set_title(f"{TITLES[fam]}: operations\n(lines: fits a + b·log2 N; brute: c·N^α)", fontsize=9)
+            _panel(axes[1][j], df, fits, fam, "ns_per_ray", colors, "power")
+            axes[1][j].set_ylabel("ns per ray (1 thread)")
+            axes[1][j].set_title(f"{TITLES[fam]}: time\n(lines: fits c·N^α; brute: a + b·N)", fontsize=9)
+        handles = {}
+        for ax in axes.flat:
+            for h, l in zip(*ax.get_legend_handles_labels()):
+                handles.setdefault(l, h)
+        fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=len(handles), fontsize=8,
+                   title="structure (as `raylab accels` names it)", title_fontsize=8)
+        fig.tight_layout(rect=(0, 0.06, 1, 1))
+        fig.savefig(out / "image_log_objects.png", dpi=110)
+        plt.close(fig)
+
+    fams = [f for f in FAILING if f in set(df["family"])]
+    if fams:
+        fig, axes = plt.subplots(1, len(fams), figsize=(4.3 * len(fams), 4.6), squeeze=False)
+        for j, fam in enumerate(fams):
+            ax = axes[0][j]
+            _panel(ax, df, fits, fam, "ops_per_ray", colors, "power")
+            ax.set_ylabel("operations per ray")
+            ax.set_title(f"{TITLES[fam]}\n(lines: fits c·N^α)", fontsize=9)
+        handles = {}
+        for ax in axes.flat:
+            for h, l in zip(*ax.get_legend_handles_labels()):
+                handles.setdefault(l, h)
+        fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=len(handles), fontsize=8)
+        fig.tight_layout(rect=(0, 0.08, 1, 1))
+        fig.savefig(out / "image_log_objects_failures.png", dpi=110)
+        plt.close(fig)
+
+    # Claim 5: query operations against memory, every structure with a byte count.
+    # Embree reports no operations (its memory is in the section's table).
+    mem = df[(df["bytes"] > 0) & ~df["accel"].isin(["brute", "embree"]) & (df["family"] != "dust")]
+    if not mem.empty:
+        fig, ax = plt.subplots(figsize=(10, 6))
+        markers = {"soup": "o", "bunny": "D", "sphereflake": "s", "needles": "^", "fan": "v", "row": "x"}
+        for (fam, accel), g in mem.groupby(["family", "accel"], sort=False):
+            g = g.sort_values("primitives")
+            ax.plot(g["bytes"], g["ops_per_ray"], marker=markers.get(fam, "."), markersize=4, color=colors[accel],
+                    linewidth=0.8, label=f"{accel}, {fam}")
+        # The bounds' shapes with unit constants, over the same n: space n^k bytes, query f(n).
+        n = np.geomspace(2 ** 8, 2 ** 20, 40)
+        for space, query, label, style in ((5, np.log2(n), "Pellegrini 1993: n^5 space, log n query", "--"),
+                                           (3, np.ones_like(n) * 4, "Mohaban-Sharir 1997 (spheres): n^3, n^ε", ":"),
+                                           (2, np.log2(n) ** 2, "Aronov-de Berg-Gray 2008 (fat): n^2, log² n", "-.")):
+            ax.plot(n ** space, query, color="black", linestyle=style, linewidth=1, label=label)
+        ax.plot(n * 16, n, color="grey", linestyle="-", linewidth=1, label="brute force: 16 bytes·n, n tests")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(1e3, 1e30)
+        ax.set_xlabel("memory (bytes); the bounds drawn with unit constants")
+        ax.set_ylabel("query cost: operations per ray")
+        ax.set_title("Query cost against memory as n grows (each line: one structure on one family, n rising)")
+        ax.grid(True, which="both", alpha=0.3)
+        legend_outside(ax, fontsize=6)
+        fig.tight_layout()
+        fig.savefig(out / "ray_shooting_bounds.png", dpi=110)
+        plt.close(fig)

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 
@@ -60,10 +61,18 @@ TEST(FuzzRegressions, BuildAndTrace) {
 // spec that is too large for the sanitizers' time limit slips through (CI: `subdivided:levels=2`
 // of the default bunny, 1.2M triangles, 22 s under ASan).
 TEST(FuzzRegressions, SceneSpecSizeBoundHoldsForEveryKind) {
-  for (const std::string spec : {"sphere", "sphere:n=8", "sphereflake", "sphereflake:depth=2,as=triangles,tess=5",
-                                 "stadium", "stadium:object=(grass:blades=7),segments=9,tiers=3", "grass", "walls",
-                                 "soup", "subdivided:of=(sphere:n=100),levels=2", "subdivided:levels=0", "instances",
-                                 "instances:of=(walls:n=2),count=5"}) {
+  const std::vector<std::string> specs = {
+      "sphere", "sphere:n=8", "sphereflake", "sphereflake:depth=2,as=triangles,tess=5", "stadium",
+      "stadium:object=(grass:blades=7),segments=9,tiers=3", "grass", "walls", "soup", "dust", "dust:n=3,size=0.5",
+      "needles", "needles:n=7", "fan", "fan:n=3", "row", "row:n=5,gap=0.01", "subdivided:of=(sphere:n=100),levels=2",
+      "subdivided:levels=0", "instances", "instances:of=(walls:n=2),count=5"};
+  // Every kind the fuzzer may build (all but meshes by name or path, and decimation) is checked.
+  for (const auto& kind : raylab::scene_kinds()) {
+    if (kind.name == "cgal" || kind.name == "file" || kind.name == "decimated") continue;
+    EXPECT_TRUE(std::any_of(specs.begin(), specs.end(), [&](const std::string& s) { return s.rfind(kind.name, 0) == 0; }))
+        << "no spec of kind " << kind.name;
+  }
+  for (const std::string& spec : specs) {
     SCOPED_TRACE(spec);
     const auto scene = raylab::make_scene(spec);
     double stored = double(scene->primitive_count() + scene->instances.size());

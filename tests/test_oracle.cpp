@@ -28,9 +28,10 @@ namespace raylab {
 namespace {
 
 /// Scenes: random soups, closed meshes, spheres, the lecture's procedural cases, instances, a
-/// real CGAL mesh, `degenerate`, built by hand below, and `gltf-instances`, a glTF 2.0 file
+/// real CGAL mesh, `degenerate`, built by hand below, `gltf-instances`, a glTF 2.0 file
 /// written below and read through Assimp: several bases under several transforms (non-uniform
-/// scales among them) beside flat geometry.
+/// scales among them) beside flat geometry, two `transformed:` scenes (far from the origin, tiny),
+/// and the scenes where log N fails.
 const std::vector<std::string> kScenes = {
     "soup:n=3000",
     "sphere:n=2000",
@@ -45,6 +46,11 @@ const std::vector<std::string> kScenes = {
     "gltf-instances",
     "transformed:of=(sphere:n=800),rotate=1;2;3:37,scale=100,translate=1e5:-3e4:2e5",
     "transformed:of=cgal:anchor,rotate=x:50,scale=1e-6",
+    // The scenes where log N fails (procedural.h), small.
+    "dust:n=2000",
+    "needles:n=256",
+    "fan:n=256",
+    "row:n=256",
 };
 
 const std::vector<std::string> kRaySpecs = {"primary:4096", "diffuse:2048", "shadow:2048", "lines:4096",

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <string>
 
+#include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
 #include "geometry/input_error.h"
 #include "scene/procedural.h"
 #include "scene/scene.h"
@@ -202,8 +205,8 @@ TEST(SceneSpecs, UnknownKindListsTheValidOnes) {
 
 TEST(SceneSpecs, KindsAreDocumented) {
   const auto& kinds = scene_kinds();
-  for (const char* name : {"cgal", "file", "sphere", "sphereflake", "stadium", "grass", "walls", "soup", "subdivided",
-                           "decimated", "instances"}) {
+  for (const char* name : {"cgal", "file", "sphere", "sphereflake", "stadium", "grass", "walls", "soup", "dust", "needles",
+                           "fan", "row", "subdivided", "decimated", "instances"}) {
     const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const SceneKindDoc& k) { return k.name == name; });
     ASSERT_NE(it, kinds.end()) << name;
     EXPECT_FALSE(it->summary.empty());
@@ -218,4 +221,68 @@ TEST(SceneSpecs, UvSphereCounts) {
   Scene s;
   s.mesh = m;
   EXPECT_TRUE(describe(s).closed);
+}
+
+// The scenes where log N fails (procedural.h): each test checks the property the scene exists for.
+
+TEST(SceneSpecs, DustLetsAlmostEveryLineEscape) {
+  const auto s = make_scene("dust:n=2000");
+  EXPECT_EQ(s->triangle_count(), 2000u);
+  EXPECT_TRUE(inside(s->bounds(), Bounds3f(Vec3f(0.0f), Vec3f(1.0f))));
+  const auto brute = make_accelerator("brute", s);
+  const auto lines = make_ray_set("lines:2000", s);
+  const TraceResult r = trace_rays(*brute, lines, TraceOptions{1, false, false});
+  EXPECT_LT(r.hit_count, lines.size() / 20) << "a dust cloud should let >95% of the lines through";
+  EXPECT_GT(make_scene("dust:n=2000,size=0.2")->bounds().diagonal().x, 0.5f);
+}
+
+TEST(SceneSpecs, NeedlesBoxesAllOverlap) {
+  const auto s = make_scene("needles:n=400");
+  ASSERT_EQ(s->triangle_count(), 400u);
+  EXPECT_EQ(describe(*s).degenerate_triangles, 0u);
+  // The intersection of every needle's bounding box is a large part of the scene box.
+  Bounds3f common = s->mesh.triangle_bounds(0);
+  for (std::size_t t = 1; t < s->mesh.size(); ++t) common = intersect(common, s->mesh.triangle_bounds(t));
+  ASSERT_FALSE(common.empty());
+  const Vec3f scene = s->bounds().diagonal(), shared = common.diagonal();
+  for (int a = 0; a < 3; ++a) EXPECT_GT(shared[a], 0.2f * scene[a]) << "axis " << a;
+}
+
+TEST(SceneSpecs, FanHasOneVertexOfValenceN) {
+  const auto s = make_scene("fan:n=500");
+  ASSERT_EQ(s->triangle_count(), 500u);
+  EXPECT_EQ(s->mesh.vertices.size(), 501u);
+  const Vec3f apex = s->mesh.vertices[0];
+  for (std::size_t t = 0; t < s->mesh.size(); ++t) {
+    EXPECT_EQ(s->mesh.triangles[t][0], 0u);
+    EXPECT_TRUE(s->mesh.triangle_bounds(t).contains(apex));
+  }
+  EXPECT_EQ(describe(*s).degenerate_triangles, 0u);
+  // Outward winding: the normal of every face points away from the axis and up.
+  for (std::size_t t = 0; t < s->mesh.size(); t += 37) {
+    const Vec3d a(s->mesh.vertex(t, 0)), b(s->mesh.vertex(t, 1)), c(s->mesh.vertex(t, 2));
+    const Vec3d n = cross(b - a, c - a), mid = (b + c) * 0.5;
+    EXPECT_GT(n.y, 0.0);
+    EXPECT_GT(n.x * mid.x + n.z * mid.z, 0.0);
+  }
+}
+
+TEST(SceneSpecs, RowRaysMissEveryTriangleInsideMostBoxes) {
+  NearMissRowConfig c;
+  c.triangles = 300;
+  const auto s = make_scene("row:n=300");
+  ASSERT_EQ(s->triangle_count(), 300u);
+  const auto rays = near_miss_row_rays(c, 256, 7);
+  const auto exact = make_accelerator("exact", s);
+  EXPECT_EQ(trace_rays(*exact, rays, TraceOptions{1, false, false}).hit_count, 0u);
+  for (const Ray& r : rays) {
+    const Vec3f inv = safe_inverse(r.dir);
+    std::size_t boxes = 0;
+    for (std::size_t t = 0; t < s->mesh.size(); ++t) {
+      float t0, t1;
+      boxes += intersect_box(s->mesh.triangle_bounds(t), r, inv, r.tmin, r.tmax, t0, t1);
+    }
+    EXPECT_GT(boxes, s->mesh.size() / 2);
+  }
+  EXPECT_THROW(make_scene("row:gap=0.1,radius=0.2"), InputError);
 }

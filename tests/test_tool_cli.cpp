@@ -72,6 +72,7 @@ TEST(ToolCli, BadInputGivesOneErrorLineAndExitStatusTwo) {
       "trace --scene transformed:of=sphere,scale=0",
       "trace --scene 'transformed:of=(sphere:radius=1e10),scale=1e30'",
       "trace --scene soup:n=100 --rays touching:10",
+      "render --scene soup:n=100 --log --out /tmp/raylab_cli_log.png",
   };
   for (const auto& args : cases) {
     const ToolRun r = run_tool(args);
@@ -79,6 +80,18 @@ TEST(ToolCli, BadInputGivesOneErrorLineAndExitStatusTwo) {
     EXPECT_EQ(r.err.rfind("raylab: error: ", 0), 0u) << args << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
   }
+}
+
+TEST(ToolCli, RenderWritesALogScaleHeatmap) {
+  const std::string path = write_file("heat_log.png", "");
+  const ToolRun r = run_tool("render --scene fan:n=500 --accel bvh --heatmap --log --width 48 --height 40 --out " + path);
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(path, std::ios::binary);
+  char magic[8] = {};
+  in.read(magic, 8);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  in.seekg(0, std::ios::end);
+  EXPECT_GT(in.tellg(), 200);
 }
 
 TEST(ToolCli, TracePrintsOneJsonObjectAndBruteForceMatchesTheOracle) {

@@ -10,6 +10,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "accel/common/tracer.h"
+#include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/surface_rays.h"
 
@@ -85,21 +91,55 @@ void write_shaded_png(const std::string& path, const std::vector<float>& values,
 }
 
 void write_heatmap_png(const std::string& path, const std::vector<float>& costs, int width, int height,
-                       const std::string& title) {
+                       const std::string& title, HeatmapScale scale, double scale_max) {
   const int bar = 90, footer = 28;
   Image img(width + bar, height + footer, 255);
-  const double max_cost = std::max(1.0f, *std::max_element(costs.begin(), costs.end()));
+  const double max_cost =
+      scale_max > 0 ? scale_max : std::max(1.0, static_cast<double>(*std::max_element(costs.begin(), costs.end())));
+  const bool log_scale = scale == HeatmapScale::log;
+  // Position of a cost on the ramp, in [0, 1].
+  auto position = [&](double c) {
+    return std::min(1.0, log_scale ? std::log1p(std::max(0.0, c)) / std::log1p(max_cost) : c / max_cost);
+  };
   for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) img.set(x, y, ramp(costs[static_cast<std::size_t>(y) * width + x] / max_cost));
+    for (int x = 0; x < width; ++x) img.set(x, y, ramp(position(costs[static_cast<std::size_t>(y) * width + x])));
   const int bx = width + 12, bw = 18;
   for (int y = 0; y < height; ++y)
     for (int x = bx; x < bx + bw; ++x) img.set(x, y, ramp(1.0 - static_cast<double>(y) / std::max(1, height - 1)));
   const Rgb black{0, 0, 0};
-  img.text(bx + bw + 4, 2, number(max_cost), 1, black);
-  img.text(bx + bw + 4, height / 2 - 4, number(max_cost / 2), 1, black);
-  img.text(bx + bw + 4, height - 10, "0", 1, black);
-  img.text(4, height + 8, title, 1, black);
+  auto label = [&](double c) {
+    const int y = static_cast<int>(std::lround((1.0 - position(c)) * (height - 1)));
+    img.text(bx + bw + 4, std::clamp(y - 4, 2, height - 10), number(c), 1, black);
+  };
+  label(0);
+  label(max_cost);
+  if (log_scale) {
+    for (double c = 10; c < max_cost / 2; c *= 10)
+      if (position(c) > 0.08 && position(c) < 0.92) label(c);
+  } else {
+    label(max_cost / 2);
+  }
+  img.text(4, height + 8, title + (log_scale ? " (log colour scale)" : ""), 1, black);
   img.save(path);
+}
+
+std::vector<float> traversal_cost_per_ray(const Aggregate& accel, const std::vector<Ray>& rays, int threads) {
+  if (!accel.reports_counters()) throw InputError("heatmap: accelerator '" + accel.name() + "' reports no traversal counters");
+  std::vector<float> values(rays.size());
+  tbb::task_arena arena(resolve_thread_count(threads));
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const auto& range) {
+      const FloatModeScope ftz(true);
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        RayCounters c;
+        Ray r = rays[i];
+        Hit h;
+        accel.intersect(r, h, c);
+        values[i] = static_cast<float>(c.nodes + c.leaves + c.prim_tests);
+      }
+    });
+  });
+  return values;
 }
 
 }  // namespace raylab

@@ -321,41 +321,24 @@ struct RenderCommand {
   std::string scene, accel = "embree", out;
   int width = 512, height = 512, threads = 0;
   bool heatmap = false;
+  bool log_scale = false;  ///< --log: the heatmap's colours on a log scale
 };
 
 int run_render(const RenderCommand& o) {
   if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
     throw InputError("--width/--height must be in [1, 16384]");
   if (o.out.size() < 5 || o.out.substr(o.out.size() - 4) != ".png") throw InputError("--out " + o.out + ": expected a .png path");
+  if (o.log_scale && !o.heatmap) throw InputError("--log: a log colour scale needs --heatmap");
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
   auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene); });
-  const Camera camera = frame_camera(scene->bounds());
-  std::vector<Ray> rays;
-  rays.reserve(static_cast<std::size_t>(o.width) * o.height);
-  for (int y = 0; y < o.height; ++y)
-    for (int x = 0; x < o.width; ++x) rays.push_back(camera_ray(camera, x + 0.5, y + 0.5, o.width, o.height));
+  const std::vector<Ray> rays = image_rays(frame_camera(scene->bounds()), o.width, o.height);
   std::vector<float> values(rays.size());
   if (o.heatmap) {
     if (!accel->reports_counters())
       throw InputError("--heatmap: accelerator '" + o.accel + "' reports no traversal counters");
-    // One counter set per pixel.
-    timed_step("rendering heatmap", [&] {
-      tbb::task_arena arena(resolve_thread_count(o.threads));
-      arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const auto& range) {
-          const FloatModeScope ftz(true);
-          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            RayCounters c;
-            Ray r = rays[i];
-            Hit h;
-            accel->intersect(r, h, c);
-            values[i] = static_cast<float>(c.nodes + c.leaves + c.prim_tests);
-          }
-        });
-      });
-      return 0;
-    });
-    write_heatmap_png(o.out, values, o.width, o.height, "nodes + leaves + primitive tests per pixel (" + o.accel + ")");
+    values = timed_step("rendering heatmap", [&] { return traversal_cost_per_ray(*accel, rays, o.threads); });
+    write_heatmap_png(o.out, values, o.width, o.height, "nodes + leaves + primitive tests per pixel (" + o.accel + ")",
+                      o.log_scale ? HeatmapScale::log : HeatmapScale::linear);
   } else {
     const TraceResult result = timed_step("rendering", [&] { return trace_rays(*accel, rays, TraceOptions{o.threads}); });
     const Vec3d light = normalize(Vec3d(0.4, 0.8, 0.45));
@@ -415,6 +398,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--height", render.height, "image height");
   render_cmd->add_option("--threads", render.threads, "threads");
   render_cmd->add_flag("--heatmap", render.heatmap, "nodes + tests per pixel with a colour bar");
+  render_cmd->add_flag("--log", render.log_scale, "with --heatmap: a logarithmic colour scale");
 
   SweepCommand sweep;
   auto* sweep_cmd = app.add_subcommand("sweep", "measure the cost model's data set: every case of a plan, one CSV row each");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <map>
+#include <optional>
 
 #include "accel/bsp/bsp.h"
 #include "accel/common/ray_sets.h"
@@ -15,6 +16,7 @@
 #include "accel/nested_grid/nested_grid.h"
 #include "accel/octree/octree.h"
 #include "cost/provenance.h"
+#include "cost/structure_cells.h"
 #include "geometry/input_error.h"
 #include "geometry/triangle_clipping.h"
 
@@ -50,84 +52,16 @@ class SurfaceSums {
   TreeFeatures f_;
 };
 
-TreeFeatures kdtree_features(const KdTree& tree) {
-  const KdTreeData& d = tree.data();
-  SurfaceSums sums(surface_area_d(d.bounds), tree.stats().bytes);
-  struct Item {
-    std::uint32_t node;
-    Bounds3f box;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, d.bounds, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
-    const KdNode& n = d.nodes[it.node];
-    if (n.is_leaf()) {
-      sums.leaf(surface_area_d(it.box), n.count(), it.depth);
-      continue;
-    }
-    sums.inner(surface_area_d(it.box), it.depth);
-    todo.push_back({n.above_child(), it.box.above(n.axis(), n.split), it.depth + 1});
-    todo.push_back({it.node + 1, it.box.below(n.axis(), n.split), it.depth + 1});
-  }
-  return sums.features();
-}
-
-TreeFeatures octree_features(const Octree& tree) {
-  const OctreeData& d = tree.data();
-  SurfaceSums sums(surface_area_d(d.bounds), tree.stats().bytes);
-  struct Item {
-    std::uint32_t node;
-    Bounds3f box;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, d.bounds, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
-    const OctNode& n = d.nodes[it.node];
-    if (n.is_leaf()) {
-      sums.leaf(surface_area_d(it.box), n.count, it.depth);
-      continue;
-    }
-    sums.inner(surface_area_d(it.box), it.depth);
-    for (unsigned i = 0; i < 8; ++i) todo.push_back({n.first + i, octree_child_box(it.box, i), it.depth + 1});
-  }
-  return sums.features();
-}
-
-TreeFeatures bsp_features(const BspTree& tree) {
-  const BspTreeData& d = tree.data();
-  const ConvexCell root(d.bounds);
-  SurfaceSums sums(root.surface_area(), tree.stats().bytes);
-  struct Item {
-    std::uint32_t node;
-    ConvexCell cell;
-    int depth;
-  };
-  std::vector<Item> todo;
-  todo.push_back({0, root, 0});
-  while (!todo.empty()) {
-    Item it = std::move(todo.back());
-    todo.pop_back();
-    const BspNode& n = d.nodes[it.node];
-    if (n.is_leaf()) {
-      sums.leaf(it.cell.surface_area(), n.count, it.depth);
-      continue;
-    }
-    sums.inner(it.cell.surface_area(), it.depth);
-    BspPlane plane;
-    plane.normal = {n.normal[0], n.normal[1], n.normal[2]};
-    plane.origin = {n.origin[0], n.origin[1], n.origin[2]};
-    plane.offset = dot(plane.normal, plane.origin);
-    plane.scale = n.scale;
-    ConvexCell negative, positive;
-    it.cell.split(plane, negative, positive);
-    todo.push_back({n.index, std::move(positive), it.depth + 1});
-    todo.push_back({it.node + 1, std::move(negative), it.depth + 1});
-  }
-  return sums.features();
+/// The surface-area sums over the cells of a tree (structure_cells.h).
+TreeFeatures cell_features(const Aggregate& accel) {
+  std::optional<SurfaceSums> sums;
+  walk_structure_cells(accel, [&](const StructureCell& c) {
+    if (!sums) sums.emplace(c.surface_area, accel.stats().bytes);
+    if (c.leaf) sums->leaf(c.surface_area, c.primitives, c.depth, c.test_groups);
+    else sums->inner(c.surface_area, c.depth);
+    return true;
+  });
+  return sums ? sums->features() : TreeFeatures{};
 }
 
 /// Triangle areas and boxes of a scene's triangles, for the EPO.
@@ -217,61 +151,10 @@ double bvh2_epo(const Bvh2& tree, const Scene& scene) {
   return epo / g.total_area;
 }
 
-TreeFeatures bvh2_features(const Bvh2& tree, std::size_t bytes) {
-  SurfaceSums sums(surface_area_d(tree.nodes[0].box), bytes);
-  struct Item {
-    std::uint32_t node;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
-    const Bvh2Node& n = tree.nodes[it.node];
-    if (n.is_leaf()) {
-      sums.leaf(surface_area_d(n.box), n.count, it.depth);
-      continue;
-    }
-    sums.inner(surface_area_d(n.box), it.depth);
-    todo.push_back({n.first, it.depth + 1});
-    todo.push_back({n.first + 1, it.depth + 1});
-  }
-  return sums.features();
-}
-
-template <int N>
-TreeFeatures wide_bvh_features(const WideBvh<N>& wide) {
-  SurfaceSums sums(surface_area_d(wide.root_box), wide.bytes());
-  struct Item {
-    std::uint32_t ref;
-    Bounds3f box;
-    int depth;
-  };
-  std::vector<Item> todo = {{0, wide.root_box, 0}};
-  while (!todo.empty()) {
-    const Item it = todo.back();
-    todo.pop_back();
-    if (WideRef::is_leaf(it.ref)) {
-      std::size_t prims = 0;
-      const std::uint32_t first = WideRef::first(it.ref);
-      for (std::uint32_t p = first; p < first + WideRef::count(it.ref); ++p) prims += wide.packets[p].size();
-      sums.leaf(surface_area_d(it.box), prims, it.depth, WideRef::count(it.ref));  // one group per packet
-      continue;
-    }
-    const WideBvhNode<N>& node = wide.nodes[it.ref];
-    sums.inner(surface_area_d(it.box), it.depth);
-    for (std::uint32_t i = 0; i < node.used; ++i) todo.push_back({node.child[i], node.box(static_cast<int>(i)), it.depth + 1});
-  }
-  return sums.features();
-}
-
 TreeFeatures bvh_features(const Bvh& bvh, const Scene& scene) {
-  const Bvh2& tree = bvh.tree();
-  if (tree.nodes.empty()) throw InputError("tree features: the BVH is empty");
-  TreeFeatures f = bvh.config().width == 4   ? wide_bvh_features(bvh.wide4())
-                   : bvh.config().width == 8 ? wide_bvh_features(bvh.wide8())
-                                             : bvh2_features(tree, bvh.stats().bytes);
-  f.epo = bvh2_epo(tree, scene);
+  if (bvh.tree().nodes.empty()) throw InputError("tree features: the BVH is empty");
+  TreeFeatures f = cell_features(bvh);
+  f.epo = bvh2_epo(bvh.tree(), scene);
   return f;
 }
 
@@ -304,9 +187,9 @@ using Extractor = std::function<TreeFeatures(const Aggregate&, const Scene&)>;
 /// One extractor per structure, by Aggregate::name(): a new structure adds its line here.
 const std::map<std::string, Extractor>& extractors() {
   static const std::map<std::string, Extractor> table = {
-      {"kdtree", [](const Aggregate& a, const Scene&) { return kdtree_features(dynamic_cast<const KdTree&>(a)); }},
-      {"octree", [](const Aggregate& a, const Scene&) { return octree_features(dynamic_cast<const Octree&>(a)); }},
-      {"bsp", [](const Aggregate& a, const Scene&) { return bsp_features(dynamic_cast<const BspTree&>(a)); }},
+      {"kdtree", [](const Aggregate& a, const Scene&) { return cell_features(a); }},
+      {"octree", [](const Aggregate& a, const Scene&) { return cell_features(a); }},
+      {"bsp", [](const Aggregate& a, const Scene&) { return cell_features(a); }},
       {"bvh", [](const Aggregate& a, const Scene& s) { return bvh_features(dynamic_cast<const Bvh&>(a), s); }},
       {"grid", [](const Aggregate& a, const Scene&) { return grid_features(dynamic_cast<const UniformGrid&>(a)); }},
       {"nested-grid",

@@ -37,4 +37,12 @@ Ray camera_ray(const Camera& camera, double px, double py, int width, int height
   return Ray{Vec3f(camera.eye), Vec3f(d), 0.0f, std::numeric_limits<float>::infinity()};
 }
 
+std::vector<Ray> image_rays(const Camera& camera, int width, int height) {
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) rays.push_back(camera_ray(camera, i + 0.5, j + 0.5, width, height));
+  return rays;
+}
+
 }  // namespace raylab

@@ -1,5 +1,7 @@
 #pragma once
 /// The pinhole camera of the `primary` ray set and of `raylab render`.
+#include <vector>
+
 #include "geometry/bounds.h"
 #include "geometry/ray.h"
 
@@ -31,5 +33,9 @@ Camera frame_camera(const Bounds3f& bounds, double fov_degrees = kDefaultFovDegr
 /// The ray through image point (px, py) of a W×H image (square pixels, aspect W/H): origin at
 /// the eye, unit direction (rounded to float), tmin = 0, tmax = inf.
 Ray camera_ray(const Camera& camera, double px, double py, int width, int height);
+
+/// The rays through the centres of every pixel of a W×H image, in scanline order: ray i is
+/// pixel (i % W, i / W).
+std::vector<Ray> image_rays(const Camera& camera, int width, int height);
 
 }  // namespace raylab

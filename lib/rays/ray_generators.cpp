@@ -120,11 +120,7 @@ std::vector<Ray> generate_rays(const std::string& spec, const Scene& scene, cons
     const Camera camera = frame_camera(bounds, fov, from);
     if (name == "primary") {
       const int w = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(count)))));
-      std::vector<Ray> rays;
-      rays.reserve(static_cast<std::size_t>(w) * static_cast<std::size_t>(w));
-      for (int j = 0; j < w; ++j)
-        for (int i = 0; i < w; ++i) rays.push_back(camera_ray(camera, i + 0.5, j + 0.5, w, w));
-      return rays;
+      return image_rays(camera, w, w);
     }
     if (!trace) throw InputError(prefix(spec) + "needs a tracer for the primary hits");
     const SurfaceRayKind kind = name == "diffuse" ? SurfaceRayKind::diffuse

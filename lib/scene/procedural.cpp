@@ -275,6 +275,105 @@ Scene make_soup(const SoupConfig& c) {
   return s;
 }
 
+Scene make_dust(const DustConfig& c) {
+  require(c.triangles >= 1 && c.triangles <= kMaxTriangles, "dust: n must be in [1, 2^27]");
+  require(std::isfinite(c.size) && c.size >= 0 && c.size <= 1, "dust: size must be in [0, 1]");
+  SoupConfig soup;
+  soup.triangles = c.triangles;
+  soup.size = c.size > 0 ? c.size : 0.1 / std::sqrt(static_cast<double>(c.triangles));
+  soup.seed = c.seed;
+  return make_soup(soup);
+}
+
+Scene make_needles(const NeedlesConfig& c) {
+  require(c.needles >= 1 && c.needles <= kMaxTriangles, "needles: n must be in [1, 2^27]");
+  require(std::isfinite(c.length) && c.length > 0 && c.length <= 1e6, "needles: length must be in (0, 1e6]");
+  require(std::isfinite(c.width) && c.width >= 0 && c.width <= 1e6, "needles: width must be in [0, 1e6]");
+  const auto side = static_cast<std::int64_t>(std::ceil(std::sqrt(static_cast<double>(c.needles))));
+  const double extent = 0.2, spacing = extent / static_cast<double>(side);
+  const double width = c.width > 0 ? c.width : 0.25 * spacing;
+  const Vec3d u = normalize(Vec3d(1, 1, 1)), e1 = normalize(Vec3d(1, -1, 0)), e2 = cross(u, e1);
+  const Vec3d centre(0.5, 0.5, 0.5);
+  Scene s;
+  s.mesh.vertices.reserve(3 * static_cast<std::size_t>(c.needles));
+  s.mesh.triangles.reserve(static_cast<std::size_t>(c.needles));
+  for (std::int64_t k = 0; k < c.needles; ++k) {
+    const double a = (static_cast<double>(k % side) + 0.5) * spacing - extent / 2;
+    const double b = (static_cast<double>(k / side) + 0.5) * spacing - extent / 2;
+    const Vec3d p = centre + e1 * a + e2 * b;
+    const auto base = u32(s.mesh.vertices.size());
+    s.mesh.vertices.push_back(Vec3f(p - u * (c.length / 2)));
+    s.mesh.vertices.push_back(Vec3f(p + u * (c.length / 2)));
+    s.mesh.vertices.push_back(Vec3f(p + e1 * width));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  return s;
+}
+
+Scene make_fan(const FanConfig& c) {
+  require(c.triangles >= 3 && c.triangles <= kMaxTriangles, "fan: n must be in [3, 2^27]");
+  require(std::isfinite(c.radius) && c.radius > 0 && c.radius <= 1e6, "fan: radius must be in (0, 1e6]");
+  require(std::isfinite(c.height) && c.height > 0 && c.height <= 1e6, "fan: height must be in (0, 1e6]");
+  const auto n = static_cast<std::size_t>(c.triangles);
+  Scene s;
+  s.mesh.vertices.reserve(n + 1);
+  s.mesh.triangles.reserve(n);
+  s.mesh.vertices.push_back(Vec3f(Vec3d(0, c.height, 0)));
+  for (std::size_t i = 0; i < n; ++i) {
+    const double phi = 2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n);
+    s.mesh.vertices.push_back(Vec3f(Vec3d(c.radius * std::cos(phi), 0, c.radius * std::sin(phi))));
+  }
+  for (std::size_t i = 0; i < n; ++i) s.mesh.triangles.push_back({0, u32(1 + (i + 1) % n), u32(1 + i)});
+  return s;
+}
+
+namespace {
+
+void check_near_miss_row(const NearMissRowConfig& c) {
+  require(c.triangles >= 1 && c.triangles <= kMaxTriangles, "row: n must be in [1, 2^27]");
+  require(std::isfinite(c.radius) && c.radius > 0 && c.radius <= 1e6, "row: radius must be in (0, 1e6]");
+  require(std::isfinite(c.gap) && c.gap > 0 && c.gap <= c.radius / 4, "row: gap must be in (0, radius/4]");
+}
+
+}  // namespace
+
+Scene make_near_miss_row(const NearMissRowConfig& c) {
+  check_near_miss_row(c);
+  // Successive triangles turn by the golden angle, so that the row surrounds the axis evenly and
+  // no plane parallel to it separates the axis from more than about half of the triangles.
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  const auto n = static_cast<std::size_t>(c.triangles);
+  Scene s;
+  s.mesh.vertices.reserve(3 * n);
+  s.mesh.triangles.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = (static_cast<double>(i) + 0.5) / static_cast<double>(n), theta = golden * static_cast<double>(i);
+    const Vec3d radial(0, std::cos(theta), std::sin(theta)), tangent(0, -std::sin(theta), std::cos(theta));
+    const Vec3d foot = Vec3d(x, 0, 0) + radial * c.gap;
+    const auto base = u32(s.mesh.vertices.size());
+    s.mesh.vertices.push_back(Vec3f(foot - tangent * c.radius));
+    s.mesh.vertices.push_back(Vec3f(foot + tangent * c.radius));
+    s.mesh.vertices.push_back(Vec3f(Vec3d(x, 0, 0) + radial * c.radius));
+    s.mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  return s;
+}
+
+std::vector<Ray> near_miss_row_rays(const NearMissRowConfig& c, std::size_t n, std::uint64_t seed) {
+  check_near_miss_row(c);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Ray> rays;
+  rays.reserve(n);
+  const double offset = c.gap / 4, slope = c.gap / (8 * 1.1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3d org(-0.05, offset * unit(rng) / std::sqrt(2.0), offset * unit(rng) / std::sqrt(2.0));
+    const Vec3d dir = normalize(Vec3d(1, slope * unit(rng) / std::sqrt(2.0), slope * unit(rng) / std::sqrt(2.0)));
+    rays.push_back(Ray{Vec3f(org), Vec3f(dir)});
+  }
+  return rays;
+}
+
 Scene make_subdivided(const Scene& of, int levels) {
   require_plain_triangles(of, "subdivided");
   require(levels >= 0 && levels <= 10, "subdivided: levels must be in [0, 10]");

@@ -5,7 +5,9 @@
 /// `scene_kinds()`; the functions here throw InputError for values outside the ranges below.
 #include <cstdint>
 #include <memory>
+#include <vector>
 
+#include "geometry/ray.h"
 #include "geometry/triangle_mesh.h"
 #include "scene/scene.h"
 
@@ -86,6 +88,65 @@ struct SoupConfig {
   std::uint64_t seed = 1;
 };
 Scene make_soup(const SoupConfig& c);
+
+/// The scenes where |Image| x log|Objects| fails (the lecture's opening claim, tested in
+/// experiments/exp_image_log_objects.cpp): each defeats every structure that bounds its cells by
+/// axis-aligned boxes in its own way.
+
+/// `dust:n=N,size=S,seed=K` — N tiny random triangles in the unit cube (a soup, make_soup, of
+/// triangle size S; default 0 = 0.1/√N, so that N·S², the expected number of triangles a line
+/// through the cube meets, stays about 0.01 as N grows). Almost every ray escapes, and a ray that
+/// hits nothing crosses every cell along its chord: ∝ N^(1/3) cells of a grid of ∛N cells per
+/// axis, and as many leaves of a balanced tree. n in [1, 2^27], default 10000; size in [0, 1].
+struct DustConfig {
+  std::int64_t triangles = 10000;
+  double size = 0.0;
+  std::uint64_t seed = 1;
+};
+Scene make_dust(const DustConfig& c);
+
+/// `needles:n=N,length=L,width=W` — N parallel needles (each one long thin triangle) along the
+/// cube diagonal (1,1,1)/√3, centred on a ⌈√N⌉×⌈√N⌉ lattice of side 0.2 in the plane through
+/// (0.5, 0.5, 0.5) perpendicular to it. A needle of length L spans L/√3 along every axis, far more
+/// than the lattice, so the bounding boxes of all needles overlap in most of the scene and every
+/// ray that meets one box meets nearly all: boxes cannot separate the needles, only cuts of the
+/// needles themselves (split clipping) can. n in [1, 2^27], default 1024; length default 1.5;
+/// width (of a needle at its middle) default 0 = a quarter of the lattice spacing.
+struct NeedlesConfig {
+  std::int64_t needles = 1024;
+  double length = 1.5;
+  double width = 0.0;
+};
+Scene make_needles(const NeedlesConfig& c);
+
+/// `fan:n=N,radius=R,height=H` — a vertex of valence N: the cone of N triangles from the apex
+/// (0, H, 0) to N points evenly spaced on the circle of radius R in the plane y = 0 (open at the
+/// bottom; outward counter-clockwise winding). Every triangle's bounding box contains the apex
+/// and reaches out to the rim, so a point of the cone lies in the boxes of a constant fraction
+/// of the triangles: any box-bounded hierarchy tests ∝ N triangles near the apex. n in
+/// [3, 2^27], default 4096; radius default 1; height default 0.5.
+struct FanConfig {
+  std::int64_t triangles = 4096;
+  double radius = 1.0, height = 0.5;
+};
+Scene make_fan(const FanConfig& c);
+
+/// `row:n=N,gap=G,radius=R` — a near-miss row: N triangles in the planes x = (i + 1/2)/N,
+/// i = 0 .. N-1, each with one edge at distance G from the x axis (its supporting line
+/// perpendicular to the radius at angle i·(golden angle) about the axis, the edge 2R long) and
+/// its third vertex at distance R on that radius. A ray along the axis passes within G of every
+/// triangle, inside the bounding boxes of most of them, and hits none (near_miss_row_rays). n in
+/// [1, 2^27], default 1024; gap in (0, R/4], default 0.001; radius default 0.25.
+struct NearMissRowConfig {
+  std::int64_t triangles = 1024;
+  double gap = 1e-3, radius = 0.25;
+};
+Scene make_near_miss_row(const NearMissRowConfig& c);
+
+/// `n` rays along the axis of make_near_miss_row(c): origins at x = -0.05 within G/4 of the
+/// axis, unit directions within G/(8·1.1) radians of +x, so that each ray stays within G/2 of
+/// the axis over the row and misses every triangle. Deterministic for a given seed.
+std::vector<Ray> near_miss_row_rays(const NearMissRowConfig& c, std::size_t n, std::uint64_t seed);
 
 /// `subdivided:of=SPEC,levels=K` — Loop subdivision (Loop, "Smooth Subdivision Surfaces Based
 /// on Triangles", MSc thesis, Utah 1987) of a triangle scene via OpenMesh's LoopT; each level

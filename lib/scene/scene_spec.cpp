@@ -154,6 +154,34 @@ std::shared_ptr<Scene> build(const std::string& text) {
     c.seed = static_cast<std::uint64_t>(r.get_int("seed", 1, 0, kMaxSeed));
     r.finish(params);
     *scene = make_soup(c);
+  } else if (name == "dust") {
+    DustConfig c;
+    c.triangles = r.get_int("n", c.triangles, 1, std::int64_t{1} << 27);
+    c.size = r.get_double("size", c.size, 0, 1);
+    c.seed = static_cast<std::uint64_t>(r.get_int("seed", 1, 0, kMaxSeed));
+    r.finish(params);
+    *scene = make_dust(c);
+  } else if (name == "needles") {
+    NeedlesConfig c;
+    c.needles = r.get_int("n", c.needles, 1, std::int64_t{1} << 27);
+    c.length = r.get_double("length", c.length, 1e-9, 1e6);
+    c.width = r.get_double("width", c.width, 0, 1e6);
+    r.finish(params);
+    *scene = make_needles(c);
+  } else if (name == "fan") {
+    FanConfig c;
+    c.triangles = r.get_int("n", c.triangles, 3, std::int64_t{1} << 27);
+    c.radius = r.get_double("radius", c.radius, 1e-9, 1e6);
+    c.height = r.get_double("height", c.height, 1e-9, 1e6);
+    r.finish(params);
+    *scene = make_fan(c);
+  } else if (name == "row") {
+    NearMissRowConfig c;
+    c.triangles = r.get_int("n", c.triangles, 1, std::int64_t{1} << 27);
+    c.radius = r.get_double("radius", c.radius, 1e-9, 1e6);
+    c.gap = r.get_double("gap", c.gap, 1e-12, c.radius / 4);
+    r.finish(params);
+    *scene = make_near_miss_row(c);
   } else if (name == "subdivided") {
     const std::string of = r.get_string("of", "cgal:bunny00");
     const int levels = static_cast<int>(r.get_int("levels", 1, 0, 10));
@@ -269,6 +297,20 @@ const std::vector<SceneKindDoc>& scene_kinds() {
        {{"n", "10000", "number of triangles, in [1, 2^27]"},
         {"size", "0", "triangle size; 0 = n^(-1/3)"},
         {"seed", "1", "random seed"}}},
+      {"dust", "tiny random triangles in the unit cube: almost every ray escapes (where log N fails)",
+       {{"n", "10000", "number of triangles, in [1, 2^27]"},
+        {"size", "0", "triangle size; 0 = 0.1/sqrt(n), about 0.01 triangles met per line"},
+        {"seed", "1", "random seed"}}},
+      {"needles", "parallel thin needles along the cube diagonal, whose boxes all overlap (where log N fails)",
+       {{"n", "1024", "number of needles (one triangle each), in [1, 2^27]"},
+        {"length", "1.5", "needle length"},
+        {"width", "0", "needle width at its middle; 0 = a quarter of the lattice spacing"}}},
+      {"fan", "a cone of n triangles around one apex of valence n (where log N fails)",
+       {{"n", "4096", "number of triangles, in [3, 2^27]"}, {"radius", "1", "rim radius"}, {"height", "0.5", "apex height"}}},
+      {"row", "a near-miss row: n triangles along the x axis, each passing within `gap` of it (where log N fails)",
+       {{"n", "1024", "number of triangles, in [1, 2^27]"},
+        {"gap", "0.001", "distance of every triangle from the axis, in (0, radius/4]"},
+        {"radius", "0.25", "size of each triangle"}}},
       {"subdivided", "Loop subdivision (OpenMesh) of a triangle scene",
        {{"of", "cgal:bunny00", "the scene to subdivide"}, {"levels", "1", "levels (x4 triangles each), in [0, 10]"}}},
       {"decimated", "quadric decimation (OpenMesh) of a triangle scene",

@@ -6,7 +6,8 @@
 ///                        glTF 2.0/FBX/COLLADA/3DS with their node tree (scene_import.h);
 ///                        `file:(PATH)` when PATH holds ',' or ':'
 ///   PATH                 a bare path with one of those extensions, or naming an existing file
-///   sphere, sphereflake, stadium, grass, walls, soup, subdivided, decimated, instances
+///   sphere, sphereflake, stadium, grass, walls, soup, dust, needles, fan, row, subdivided,
+///   decimated, instances
 ///                        the procedural scenes of procedural.h; nested scenes are specs too:
 ///                        `stadium:object=(sphereflake:depth=2),ratio=1000`
 #include <memory>

@@ -77,6 +77,21 @@ std::vector<Vec3d> order_cap(std::vector<Vec3d> points, const Vec3d& normal) {
 
 }  // namespace
 
+bool ConvexCell::meets_line(const Vec3d& origin, const Vec3d& direction) const {
+  // The line passes through a convex polygon exactly when it turns the same way around every
+  // edge: the signs of dot(d, (a - o) x (b - o)) over the edges (a, b) do not differ.
+  for (const auto& face : faces_) {
+    bool positive = false, negative = false;
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      const double s = dot(direction, cross(face[i] - origin, face[(i + 1) % face.size()] - origin));
+      positive = positive || s > 0.0;
+      negative = negative || s < 0.0;
+    }
+    if (!(positive && negative)) return true;
+  }
+  return false;
+}
+
 double ConvexCell::surface_area() const {
   double a = 0.0;
   for (const auto& f : faces_) a += polygon_area(f);

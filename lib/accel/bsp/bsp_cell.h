@@ -18,6 +18,9 @@ class ConvexCell {
   /// half-spaces of the exact planes split by), rounded outward from box().
   Bounds3f bounds() const;
   bool empty() const { return faces_.empty(); }
+  /// Whether the line {origin + t·direction} meets the cell: it crosses (or touches) one of its
+  /// faces, decided in double by the orientation of the line against each face's edges.
+  bool meets_line(const Vec3d& origin, const Vec3d& direction) const;
   /// The two parts of this cell on the negative and positive sides of `plane`.
   void split(const BspPlane& plane, ConvexCell& negative, ConvexCell& positive) const;
 
