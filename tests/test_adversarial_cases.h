@@ -215,14 +215,15 @@ inline Case shared_edges_case(const std::string& name, std::shared_ptr<const Sce
   return c;
 }
 
-/// A closed mesh far from the origin (offsets 1e3 and 1e6), tiny (scale 1e-6) and huge (1e6),
-/// rotated, through the `transformed` scene kind: edge-, vertex-aimed, touching and grazing rays
+/// A closed mesh far from the origin (offsets 1e3, and 1e6 with the mesh scaled by 100: at its
+/// own size a mesh of unit extent at 1e6 collapses to a few float positions and grid cells turn a
+/// few ulps wide), tiny (scale 1e-6) and huge (1e6), rotated, through the `transformed` scene kind: edge-, vertex-aimed, touching and grazing rays
 /// and random lines.
 inline std::vector<Case> transformed_cases(const std::string& mesh_spec, std::size_t n) {
   std::vector<Case> cases;
   for (const auto& [label, transform] : std::vector<std::pair<std::string, std::string>>{
            {"offset1e3", "rotate=1;2;3:40,translate=1e3:-2e3:5e2"},
-           {"offset1e6", "rotate=x:30,translate=1e6:3e5:-2e5"},
+           {"offset1e6", "rotate=x:30,scale=100,translate=1e6:3e5:-2e5"},
            {"scale1e-6", "rotate=y:70,scale=1e-6"},
            {"scale1e6", "rotate=z:10,scale=1e6,translate=2e6:0:0"}}) {
     const std::string spec = "transformed:of=(" + mesh_spec + ")," + transform;
