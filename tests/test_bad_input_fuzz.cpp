@@ -65,7 +65,8 @@ TEST(FuzzRegressions, SceneSpecSizeBoundHoldsForEveryKind) {
       "sphere", "sphere:n=8", "sphereflake", "sphereflake:depth=2,as=triangles,tess=5", "stadium",
       "stadium:object=(grass:blades=7),segments=9,tiers=3", "grass", "walls", "soup", "dust", "dust:n=3,size=0.5",
       "needles", "needles:n=7", "fan", "fan:n=3", "row", "row:n=5,gap=0.01", "subdivided:of=(sphere:n=100),levels=2",
-      "subdivided:levels=0", "instances", "instances:of=(walls:n=2),count=5"};
+      "subdivided:levels=0", "instances", "instances:of=(walls:n=2),count=5", "transformed:of=(sphere:n=100),scale=2",
+      "transformed:of=(instances:of=(walls:n=2),count=5),rotate=x:30,translate=1e5:0:0"};
   // Every kind the fuzzer may build (all but meshes by name or path, and decimation) is checked.
   for (const auto& kind : raylab::scene_kinds()) {
     if (kind.name == "cgal" || kind.name == "file" || kind.name == "decimated") continue;
