@@ -65,6 +65,9 @@ class ExactFirstHit {
 /// The exact kernel under the common kernel interface (triangle_kernels.h): every offer goes to
 /// one ExactFirstHit, so the first hit is ordered exactly whatever the order of the offers.
 struct ExactKernel {
+  /// It decides t in the closed [tmin, tmax] exactly, so any-hit queries must not widen tmax
+  /// (primitive.h, any_hit_ray), as for the certified kernel.
+  static constexpr bool kClosedInterval = true;
   struct Context {
     ExactFirstHit first;
   };
