@@ -107,13 +107,7 @@ struct CertifiedKernel {
   static Context prepare(const Ray& ray) {
     Context c;
     c.ray = ray;
-    c.kz = max_abs_axis(ray.dir);
-    c.kx = (c.kz + 1) % 3;
-    c.ky = (c.kx + 1) % 3;
-    if (ray.dir[c.kz] < 0.0f) std::swap(c.kx, c.ky);
-    c.sx = ray.dir[c.kx] / ray.dir[c.kz];
-    c.sy = ray.dir[c.ky] / ray.dir[c.kz];
-    c.sz = 1.0f / ray.dir[c.kz];
+    set_watertight_shear(c, ray.dir);
     c.filter = std::abs(ray.dir[c.kz]) >= 0x1p-60f && std::isfinite(c.sz);
     c.reach = reach_of(ray.tmax);
     return c;

@@ -15,6 +15,7 @@
 ///    2013, with its double-precision recomputation of edge functions that evaluate to zero.
 ///  - ExactKernel (exact_predicates.h): CGAL exact predicates and exact first-hit ordering.
 #include <cmath>
+#include <utility>
 
 #include "geometry/ray.h"
 #include "geometry/sphere.h"
@@ -63,6 +64,20 @@ struct MollerTrumboreKernel {
   }
 };
 
+/// The watertight test's shear (Woop, Benthin and Wald 2013, section 3): kz the dominant axis of
+/// `dir`, kx and ky the other two, swapped when dir[kz] < 0 to keep the winding; sx, sy, sz shear
+/// and scale the ray onto +z. Sets those six members of any kernel's context.
+template <class Context>
+void set_watertight_shear(Context& c, const Vec3f& dir) {
+  c.kz = max_abs_axis(dir);
+  c.kx = (c.kz + 1) % 3;
+  c.ky = (c.kx + 1) % 3;
+  if (dir[c.kz] < 0.0f) std::swap(c.kx, c.ky);
+  c.sx = dir[c.kx] / dir[c.kz];
+  c.sy = dir[c.ky] / dir[c.kz];
+  c.sz = 1.0f / dir[c.kz];
+}
+
 struct WatertightKernel {
   /// The per-ray shear of Woop et al.: kz is the dominant axis of the direction; kx, ky are
   /// swapped when d[kz] < 0 to keep the winding.
@@ -76,13 +91,7 @@ struct WatertightKernel {
     Context c;
     c.org = ray.org;
     c.dir = ray.dir;
-    c.kz = max_abs_axis(ray.dir);
-    c.kx = (c.kz + 1) % 3;
-    c.ky = (c.kx + 1) % 3;
-    if (ray.dir[c.kz] < 0.0f) std::swap(c.kx, c.ky);
-    c.sx = ray.dir[c.kx] / ray.dir[c.kz];
-    c.sy = ray.dir[c.ky] / ray.dir[c.kz];
-    c.sz = 1.0f / ray.dir[c.kz];
+    set_watertight_shear(c, ray.dir);
     c.tmin = ray.tmin;
     c.tmax = ray.tmax;
     return c;
