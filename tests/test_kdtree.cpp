@@ -267,18 +267,17 @@ void expect_no_triangle_lost(const Scene& scene, const KdTreeData& data) {
 TEST(KdTree, ExactClippingLosesNoTriangle) {
   for (const auto& scene : {make("soup:n=600"), make("walls:n=6,angle=30"), lattice_scene()}) {
     for (const std::string params : {"clip=exact", "clip=exact,builder=midpoint", "clip=exact,builder=median"}) {
-      const KdTree tree(scene, config_for(params));
-      expect_no_triangle_lost(*scene, tree.data());
+      expect_no_triangle_lost(*scene, build_kdtree(*scene, config_for(params)));
     }
   }
 }
 
 TEST(KdTree, ExactClippingListsOnlyTrianglesThatMeetTheLeaf) {
   const auto scene = make("soup:n=600");
-  const KdTree tree(scene, config_for("clip=exact"));
-  for_each_kd_leaf(tree.data(), [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
+  const KdTreeData data = build_kdtree(*scene, config_for("clip=exact"));
+  for_each_kd_leaf(data, [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
     for (std::uint32_t i = 0; i < count; ++i) {
-      const auto& tri = scene->mesh.triangles[tree.data().prims[first + i]];
+      const auto& tri = scene->mesh.triangles[data.prims[first + i]];
       const auto& v = scene->mesh.vertices;
       EXPECT_TRUE(exact_triangle_intersects_box(v[tri[0]], v[tri[1]], v[tri[2]], box));
     }
