@@ -6,6 +6,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/tracer.h"
+#include "accel/common/structure_hash.h"
 #include "accel/kdtree/kdtree.h"
 #include "accel/kdtree/sah_sweep_events.h"
 #include "geometry/exact_predicates.h"
@@ -440,6 +441,22 @@ TEST(KdTree, PackedLeavesHoldEachLeafsTrianglesInOrder) {
   EXPECT_TRUE(kd_pack_leaves(*spheres, sdata.prims, slines).empty());
   for (std::size_t i = 0; i < slines.size(); ++i)
     for (int k = 0; k < 8; ++k) EXPECT_EQ(slines[i].node[k].first, kd_node_lines(sdata.nodes)[i].node[k].first);
+}
+
+/// A tree keeps only what its traversal reads: the stack traversal over packed triangles drops
+/// the leaf index array (the packets carry the ids) but keeps it when spheres leave the leaves
+/// unpacked; the structure hash is that of the built tree either way.
+TEST(KdTree, StackTraversalOverPackedLeavesReleasesThePrimitiveIndices) {
+  const auto triangles = make("soup:n=2000");
+  const KdTree stack(triangles, config_for(""));
+  const KdTree recursive(triangles, config_for("traversal=recursive"));
+  EXPECT_TRUE(stack.data().prims.empty());
+  EXPECT_FALSE(recursive.data().prims.empty());
+  EXPECT_EQ(stack.structure_hash(), recursive.structure_hash());
+  const KdTreeData built = build_kdtree(*triangles, config_for(""));
+  EXPECT_EQ(stack.structure_hash(), fnv1a(built.prims, fnv1a(built.nodes)));
+  const auto spheres = make("sphereflake:depth=1");
+  EXPECT_FALSE(KdTree(spheres, config_for("")).data().prims.empty());
 }
 
 TEST(KdTree, CostParametersShapeTheTree) {
