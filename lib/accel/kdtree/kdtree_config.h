@@ -27,10 +27,11 @@ enum class KdTraversal {
 /// The default C_isect for C_trav = 1: the ratio of the lab's fitted kd-tree constants
 /// (data/cost/default_model.json, families.kdtree.builder: C_isect 1.43 ns per test against
 /// C_trav 7.28 ns per node, i.e. 0.196), which `cost=default` applies. A leaf test is one
-/// 4-wide packet test while a node visit is a dependent load, so the lecture's 1:1.5 stops
-/// splitting far too early: on BM_KdTrace (bench_kdtree) 1:0.2 traces the CGAL meshes ~25%
-/// faster (primary and diffuse) in less than half the memory. Fixed here rather than read
-/// from the model, so that refitting the model does not change the default tree.
+/// 4-wide packet test while a node visit is a dependent load, so the lecture's 1:1.5 splits far
+/// too deep (sphere:n=262144: 1.3M nodes against 196k). On BM_KdTrace (bench_kdtree: bunny00,
+/// armadillo, ChineseDragon-10kv) 1:0.2 traced ~20-30% faster than 1:1.5 on primary and diffuse
+/// rays, in less than half the memory (noisy shared machine; ratios to Embree in the same run).
+/// Fixed here rather than read from the model, so that refitting it does not change the tree.
 inline constexpr double kKdDefaultIsect = 0.2;
 
 struct KdTreeConfig {
