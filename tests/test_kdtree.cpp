@@ -6,6 +6,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/tracer.h"
+#include "accel/common/structure_hash.h"
 #include "accel/kdtree/kdtree.h"
 #include "accel/kdtree/sah_sweep_events.h"
 #include "geometry/exact_predicates.h"
@@ -267,18 +268,17 @@ void expect_no_triangle_lost(const Scene& scene, const KdTreeData& data) {
 TEST(KdTree, ExactClippingLosesNoTriangle) {
   for (const auto& scene : {make("soup:n=600"), make("walls:n=6,angle=30"), lattice_scene()}) {
     for (const std::string params : {"clip=exact", "clip=exact,builder=midpoint", "clip=exact,builder=median"}) {
-      const KdTree tree(scene, config_for(params));
-      expect_no_triangle_lost(*scene, tree.data());
+      expect_no_triangle_lost(*scene, build_kdtree(*scene, config_for(params)));
     }
   }
 }
 
 TEST(KdTree, ExactClippingListsOnlyTrianglesThatMeetTheLeaf) {
   const auto scene = make("soup:n=600");
-  const KdTree tree(scene, config_for("clip=exact"));
-  for_each_kd_leaf(tree.data(), [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
+  const KdTreeData data = build_kdtree(*scene, config_for("clip=exact"));
+  for_each_kd_leaf(data, [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
     for (std::uint32_t i = 0; i < count; ++i) {
-      const auto& tri = scene->mesh.triangles[tree.data().prims[first + i]];
+      const auto& tri = scene->mesh.triangles[data.prims[first + i]];
       const auto& v = scene->mesh.vertices;
       EXPECT_TRUE(exact_triangle_intersects_box(v[tri[0]], v[tri[1]], v[tri[2]], box));
     }
@@ -441,6 +441,22 @@ TEST(KdTree, PackedLeavesHoldEachLeafsTrianglesInOrder) {
   EXPECT_TRUE(kd_pack_leaves(*spheres, sdata.prims, slines).empty());
   for (std::size_t i = 0; i < slines.size(); ++i)
     for (int k = 0; k < 8; ++k) EXPECT_EQ(slines[i].node[k].first, kd_node_lines(sdata.nodes)[i].node[k].first);
+}
+
+/// A tree keeps only what its traversal reads: the stack traversal over packed triangles drops
+/// the leaf index array (the packets carry the ids) but keeps it when spheres leave the leaves
+/// unpacked; the structure hash is that of the built tree either way.
+TEST(KdTree, StackTraversalOverPackedLeavesReleasesThePrimitiveIndices) {
+  const auto triangles = make("soup:n=2000");
+  const KdTree stack(triangles, config_for(""));
+  const KdTree recursive(triangles, config_for("traversal=recursive"));
+  EXPECT_TRUE(stack.data().prims.empty());
+  EXPECT_FALSE(recursive.data().prims.empty());
+  EXPECT_EQ(stack.structure_hash(), recursive.structure_hash());
+  const KdTreeData built = build_kdtree(*triangles, config_for(""));
+  EXPECT_EQ(stack.structure_hash(), fnv1a(built.prims, fnv1a(built.nodes)));
+  const auto spheres = make("sphereflake:depth=1");
+  EXPECT_FALSE(KdTree(spheres, config_for("")).data().prims.empty());
 }
 
 TEST(KdTree, CostParametersShapeTheTree) {

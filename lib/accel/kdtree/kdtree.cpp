@@ -5,12 +5,17 @@
 namespace raylab {
 
 KdTree::KdTree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config)
-    : scene_(std::move(scene)),
-      config_(config),
-      data_(build_kdtree(*scene_, config_)),
-      tris_(make_triangle_soup(*scene_)),
-      lines_(kd_node_lines(data_.nodes)),
-      packets_(kd_pack_leaves(*scene_, data_.prims, lines_)) {}
+    : scene_(std::move(scene)), config_(config), data_(build_kdtree(*scene_, config_)) {
+  hash_ = fnv1a(data_.prims, fnv1a(data_.nodes));
+  if (config_.traversal == KdTraversal::recursive) {
+    tris_ = make_triangle_soup(*scene_);
+    return;
+  }
+  lines_ = kd_node_lines(data_.nodes);
+  packets_ = kd_pack_leaves(*scene_, data_.prims, lines_);
+  // Packed leaves carry their primitive ids; without packets (spheres) the leaves index prims.
+  if (!packets_.empty()) std::vector<std::uint32_t>().swap(data_.prims);
+}
 
 AccelStats KdTree::stats() const {
   return {data_.nodes.size() * sizeof(KdNode) + data_.prims.size() * sizeof(std::uint32_t) +
@@ -20,10 +25,7 @@ AccelStats KdTree::stats() const {
           data_.sah_cost};
 }
 
-std::optional<std::uint64_t> KdTree::structure_hash() const {
-  std::uint64_t h = fnv1a(data_.nodes);
-  return fnv1a(data_.prims, h);
-}
+std::optional<std::uint64_t> KdTree::structure_hash() const { return hash_; }
 
 namespace {
 
@@ -37,7 +39,7 @@ std::vector<ParamDoc> kdtree_params() {
           {"clip", "exact", "split clipping: none | bbox | exact (CGAL triangle/box predicate, perfect splits)"},
           {"traversal", "stack", "recursive (Kaplan/Arvo/Jansen) | stack"},
           {"c_trav", "1", "SAH traversal cost"},
-          {"c_isect", "1.5", "SAH intersection cost"},
+          {"c_isect", "0.2", "SAH intersection cost (kdtree_config.h: kKdDefaultIsect)"},
           fitted_cost_param(),
           {"empty_bonus", "0.2", "SAH empty-space bonus in [0,1)"},
           {"max_depth", "0", "safety depth limit; 0 = 8 + 1.3 log2 N, at most 64"},
@@ -55,7 +57,7 @@ KdTreeConfig read_kdtree_config(SpecReader& r) {
   c.sweep = r.get_choice("sweep", "events", kSweeps) == "sort" ? KdSweep::sort : KdSweep::events;
   c.clip = parse_clip_mode(r.get_choice("clip", "exact", clip_mode_names()));
   c.traversal = r.get_choice("traversal", "stack", kTraversals) == "recursive" ? KdTraversal::recursive : KdTraversal::stack;
-  read_sah_constants(r, "kdtree", 1.0, 1.5, c.cost);
+  read_sah_constants(r, "kdtree", 1.0, kKdDefaultIsect, c.cost);
   c.cost.empty_bonus = r.get_double("empty_bonus", 0.2, 0.0, 0.99);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 64));
   c.leaf_size = static_cast<int>(r.get_int("leaf_size", 4, 1, 1 << 20));

@@ -19,6 +19,8 @@ class KdTree final : public AggregateBase<KdTree> {
   Bounds3f bounds() const override { return data_.bounds; }
   std::optional<std::uint64_t> structure_hash() const override;
 
+  /// The built tree. Its `prims` are released (empty) once the stack traversal reads packed
+  /// leaves, which carry their primitive ids: build_kdtree gives the full data.
   const KdTreeData& data() const { return data_; }
   const KdTreeConfig& config() const { return config_; }
 
@@ -57,9 +59,11 @@ class KdTree final : public AggregateBase<KdTree> {
   std::shared_ptr<const Scene> scene_;
   KdTreeConfig config_;
   KdTreeData data_;
-  std::vector<KdTriangle> tris_;   ///< the triangles by primitive id (kdtree_triangle_soup.h)
-  std::vector<KdNodeLine> lines_;  ///< data_.nodes in cache lines, for the stack traversal
-  std::vector<TrianglePacket> packets_;  ///< the leaves of lines_ packed 4-wide (kd_pack_leaves)
+  std::uint64_t hash_ = 0;  ///< of data_.nodes and data_.prims as built
+  // Only the arrays the configured traversal reads are kept (stats() counts them all):
+  std::vector<KdTriangle> tris_;   ///< recursive: the triangles by primitive id (kdtree_triangle_soup.h)
+  std::vector<KdNodeLine> lines_;  ///< stack: data_.nodes in cache lines
+  std::vector<TrianglePacket> packets_;  ///< stack: the leaves of lines_ packed 4-wide (kd_pack_leaves)
 };
 
 /// The factory entry: parameters, accuracy bound and oracle variants.

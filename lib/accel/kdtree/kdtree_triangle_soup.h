@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "accel/bvh/packed_triangles.h"
+#include "accel/kdtree/huge_pages.h"
 #include "accel/kdtree/kdtree_node_lines.h"
 #include "geometry/vec3.h"
 #include "scene/scene.h"
@@ -60,6 +61,7 @@ inline std::vector<TrianglePacket> kd_pack_leaves(const Scene& scene, const std:
   std::size_t packets = 0;
   for_each_leaf([&](const KdNode& n) { packets += (n.count() + kPacketWidth - 1) / kPacketWidth; });
   out.reserve(packets);
+  advise_huge_pages(out.data(), packets * sizeof(TrianglePacket));
   for_each_leaf([&](KdNode& n) {
     const auto first = static_cast<std::uint32_t>(out.size());
     pack_leaf(scene, std::span<const std::uint32_t>(prims.data() + n.first, n.count()), out);
