@@ -44,6 +44,64 @@ inline CellRange cell_range(const GridGeometry& g, const Bounds3f& b, float marg
   return r;
 }
 
+/// Sutherland-Hodgman: the part of the convex polygon in[0, n) with x[axis] >= bound (keep_above)
+/// or <= bound, written to out (at most n + 1 vertices); returns its vertex count.
+inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, int axis, float bound, bool keep_above) {
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec3f& a = in[i];
+    const Vec3f& b = in[i + 1 == n ? 0 : i + 1];
+    const float da = keep_above ? a[axis] - bound : bound - a[axis];
+    const float db = keep_above ? b[axis] - bound : bound - b[axis];
+    if (da >= 0.0f) out[m++] = a;
+    if ((da < 0.0f) != (db < 0.0f)) {
+      const float t = std::clamp(da / (da - db), 0.0f, 1.0f);
+      Vec3f p = a + (b - a) * t;
+      p[axis] = bound;
+      out[m++] = p;
+    }
+  }
+  return m;
+}
+
+/// Calls row(j, k, i_lo, i_hi) for the rows of cells (j, k) of range `r` that a triangle's part
+/// in them reaches, with the x-range of cells that part spans: the triangle clipped to each
+/// slab k widened by 2·margin, then to each row j widened by 2·margin. The extra margin covers the
+/// float rounding of the clipping (a few ulps of the coordinates, far below the margin), so
+/// the rows and ranges include every cell whose box widened by `margin` the triangle meets.
+template <class Row>
+inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
+                                 Row&& row) {
+  const float slack = 2.0f * margin;
+  Vec3f slab[8], tmp[8], cell_row[8];
+  for (int k = r.lo[2]; k <= r.hi[2]; ++k) {
+    int ns = 3;
+    std::copy(tri, tri + 3, slab);
+    if (r.lo[2] != r.hi[2]) {
+      ns = clip_polygon(tri, 3, tmp, 2, g.plane(2, k) - slack, true);
+      ns = clip_polygon(tmp, ns, slab, 2, g.plane(2, k + 1) + slack, false);
+      if (ns == 0) continue;
+    }
+    float ylo = slab[0].y, yhi = slab[0].y;
+    for (int v = 1; v < ns; ++v) ylo = std::min(ylo, slab[v].y), yhi = std::max(yhi, slab[v].y);
+    const int jlo = std::max(r.lo[1], g.cell_of(1, ylo - margin)), jhi = std::min(r.hi[1], g.cell_of(1, yhi + margin));
+    for (int j = jlo; j <= jhi; ++j) {
+      const Vec3f* part = slab;
+      int nr = ns;
+      if (jlo != jhi) {
+        nr = clip_polygon(slab, ns, tmp, 1, g.plane(1, j) - slack, true);
+        nr = clip_polygon(tmp, nr, cell_row, 1, g.plane(1, j + 1) + slack, false);
+        if (nr == 0) continue;
+        part = cell_row;
+      }
+      float xlo = part[0].x, xhi = part[0].x;
+      for (int v = 1; v < nr; ++v) xlo = std::min(xlo, part[v].x), xhi = std::max(xhi, part[v].x);
+      const int ilo = std::max(r.lo[0], g.cell_of(0, xlo - margin)), ihi = std::min(r.hi[0], g.cell_of(0, xhi + margin));
+      if (ilo <= ihi) row(j, k, ilo, ihi);
+    }
+  }
+}
+
 inline Bounds3f prim_bounds(const Scene& s, std::uint32_t prim) {
   if (s.is_sphere(prim)) return s.sphere(prim).bounds();
   const auto& t = s.mesh.triangles[prim];
@@ -120,6 +178,12 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
                 float margin, CellRefIds ids) {
   OrderedRanges ordered = ordered_ranges(scene, n, prim_at, g, margin);
   const bool local = ids == CellRefIds::visit_order;
+  // The triangles in visit order, gathered once (one random read per primitive): the reference
+  // ids of a local build, and sequential reads for clipping, which reads every triangle twice.
+  const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
+  CellTriangles visit_tris;
+  if (gather) visit_tris = copy_cell_triangles(scene, std::move(ordered.prims));
+  const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : ordered.prims;
   CellLists out;
   const std::size_t cells = g.cell_count();
   out.offsets.assign(cells + 1, 0);
@@ -172,7 +236,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     out.refs.resize(total);
     std::uint32_t* refs = out.refs.data();
     for (std::size_t p = n; p-- > 0;) {
-      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : ordered.prims[p];
+      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
       const CellRange r = ordered.ranges[p];
       for (int k = r.lo[2]; k <= r.hi[2]; ++k)
         for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
@@ -180,14 +244,56 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           for (int i = r.lo[0]; i <= r.hi[0]; ++i) refs[--row[i]] = ref;
         }
     }
-    if (local) out.visit_order = std::move(ordered.prims);
+    if (local) out.triangles = std::move(visit_tris);
+    return out;
+  }
+  if (placement == GridPlacement::clipped) {
+    // Two passes over the clipped rows: counts by a difference array along each row (+1 at the
+    // row range's first cell, -1 past its last), prefix sums along x and over all cells, then the
+    // fill backwards as for bbox.
+    const int nx = g.res[0];
+    std::uint32_t* cursor = out.offsets.data();
+    auto rows_of = [&](std::size_t p, auto&& row) {
+      const CellRange& r = ordered.ranges[p];
+      if (!gather || (r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2])) {
+        for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+          for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
+        return;
+      }
+      const CellTriangles::Triangle& t = visit_tris.tris[p];
+      const Vec3f tri[3] = {t.v0, t.v1, t.v2};
+      for_each_clipped_row(g, tri, r, margin, row);
+    };
+    std::size_t total = 0;
+    for (std::size_t p = 0; p < n; ++p)
+      rows_of(p, [&](int j, int k, int ilo, int ihi) {
+        std::uint32_t* cells_row = cursor + g.index(0, j, k);
+        ++cells_row[ilo];
+        if (ihi + 1 < nx) --cells_row[ihi + 1];
+        total += std::size_t(ihi - ilo + 1);
+      });
+    check_ref_count(total);
+    for (std::size_t base = 0; base < cells; base += std::size_t(nx))
+      for (std::size_t i = 1; i < std::size_t(nx); ++i) cursor[base + i] += cursor[base + i - 1];
+    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
+    out.offsets[cells] = static_cast<std::uint32_t>(total);
+    out.refs.resize(total);
+    std::uint32_t* refs = out.refs.data();
+    for (std::size_t p = n; p-- > 0;) {
+      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
+      rows_of(p, [&](int j, int k, int ilo, int ihi) {
+        std::uint32_t* cells_row = cursor + g.index(0, j, k);
+        for (int i = ilo; i <= ihi; ++i) refs[--cells_row[i]] = ref;
+      });
+    }
+    if (local) out.triangles = std::move(visit_tris);
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   pairs.reserve(n * 2);
   for (std::size_t p = 0; p < n; ++p) {
-    const std::uint32_t prim = ordered.prims[p];
+    const std::uint32_t prim = prims[p];
     const CellRange& r = ordered.ranges[p];
     const bool single = r.lo[0] == r.hi[0] && r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2];
     for (int k = r.lo[2]; k <= r.hi[2]; ++k)
@@ -202,7 +308,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   out.refs.resize(pairs.size());
   std::vector<std::uint32_t> cursor(out.offsets.begin(), out.offsets.end() - 1);
   for (const auto& pr : pairs) out.refs[cursor[pr.first]++] = pr.second;
-  if (local) out.visit_order = std::move(ordered.prims);
+  if (local) out.triangles = std::move(visit_tris);
   return out;
 }
 
