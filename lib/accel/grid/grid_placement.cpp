@@ -137,56 +137,52 @@ void check_ref_count(std::size_t total) {
                      " cell references overflow 32-bit offsets; lower the density d or use place=exact");
 }
 
-/// The primitives' cell ranges, in the order placement visits them: by the index of their
-/// lowest cell (row (j, k), then column i), two stable counting sorts (by i, then by row). Cells
-/// are stored in index order, so visiting primitives in this order walks the cell arrays nearly
-/// sequentially instead of at random (grass lists its blades in random positions), and
-/// primitives that share cells get nearby positions. A cell lists its primitives in this order.
-struct OrderedRanges {
-  std::vector<std::uint32_t> prims;
-  BuildArray<CellRange> ranges;
-};
-
+/// The order placement visits primitives in: by the index of their bounds' lowest cell (row
+/// (j, k), then column i), a stable counting sort in `counts` (cell_count + 1 entries, zero on
+/// entry and on return). Cells are stored in index order, so visiting primitives in this order
+/// walks the cell arrays nearly sequentially instead of at random (grass lists its blades in
+/// random positions), and primitives that share cells get nearby positions. A cell lists its
+/// primitives in this order. Only one key per primitive is kept: the passes recompute cell ranges.
 template <class PrimAt>
-OrderedRanges ordered_ranges(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, float margin) {
-  BuildArray<CellRange> by_input(n);
-  const std::size_t rows = std::size_t(g.res[1]) * std::size_t(g.res[2]);
-  std::vector<std::uint32_t> column_start(std::size_t(g.res[0]) + 1, 0), row_start(rows + 1, 0);
-  auto row_of = [&](const CellRange& r) { return std::size_t(r.lo[2]) * g.res[1] + r.lo[1]; };
+std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
+                                       float margin, std::uint32_t* counts) {
+  BuildArray<std::uint32_t> key(n);
   for (std::size_t p = 0; p < n; ++p) {
-    by_input[p] = cell_range(g, prim_bounds(scene, prim_at(p)), margin);
-    ++column_start[std::size_t(by_input[p].lo[0]) + 1];
-    ++row_start[row_of(by_input[p]) + 1];
+    const Bounds3f b = prim_bounds(scene, prim_at(p));
+    key[p] = g.index(g.cell_of(0, b.lo.x - margin), g.cell_of(1, b.lo.y - margin), g.cell_of(2, b.lo.z - margin));
+    ++counts[key[p] + 1];
   }
-  for (int i = 0; i < g.res[0]; ++i) column_start[i + 1] += column_start[i];
-  for (std::size_t r = 0; r < rows; ++r) row_start[r + 1] += row_start[r];
-  BuildArray<std::uint32_t> by_column(n);
-  for (std::size_t p = 0; p < n; ++p) by_column[column_start[by_input[p].lo[0]]++] = static_cast<std::uint32_t>(p);
-  OrderedRanges out;
-  out.prims.resize(n);
-  out.ranges.resize(n);
-  for (const std::uint32_t p : by_column) {
-    const std::uint32_t at = row_start[row_of(by_input[p])]++;
-    out.prims[at] = prim_at(p);
-    out.ranges[at] = by_input[p];
-  }
-  return out;
+  const std::size_t cells = g.cell_count();
+  for (std::size_t c = 1; c < cells; ++c) counts[c] += counts[c - 1];
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t p = 0; p < n; ++p) order[counts[key[p]]++] = prim_at(p);
+  std::fill(counts, counts + cells + 1, 0u);
+  return order;
 }
 
 template <class PrimAt>
 CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, GridPlacement placement,
                 float margin, CellRefIds ids) {
-  OrderedRanges ordered = ordered_ranges(scene, n, prim_at, g, margin);
+  CellLists out;
+  const std::size_t cells = g.cell_count();
+  out.offsets.assign(cells + 1, 0);
+  std::vector<std::uint32_t> order = visit_order(scene, n, prim_at, g, margin, out.offsets.data());
   const bool local = ids == CellRefIds::visit_order;
   // The triangles in visit order, gathered once (one random read per primitive): the reference
   // ids of a local build, and sequential reads for clipping, which reads every triangle twice.
   const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
   CellTriangles visit_tris;
-  if (gather) visit_tris = copy_cell_triangles(scene, std::move(ordered.prims));
-  const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : ordered.prims;
-  CellLists out;
-  const std::size_t cells = g.cell_count();
-  out.offsets.assign(cells + 1, 0);
+  if (gather) visit_tris = copy_cell_triangles(scene, std::move(order));
+  const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
+  // The cell range of the p-th primitive visited, from its copied triangle when there is one.
+  auto range_of = [&](std::size_t p) {
+    if (!gather) return cell_range(g, prim_bounds(scene, prims[p]), margin);
+    const CellTriangles::Triangle& t = visit_tris.tris[p];
+    Bounds3f b(t.v0);
+    b.extend(t.v1);
+    b.extend(t.v2);
+    return cell_range(g, b, margin);
+  };
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
     // Counting sort without a shift pass: counts go to offsets[c], an inclusive prefix sum makes
@@ -203,11 +199,12 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
       return std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
     };
     std::size_t total = 0;
-    for (const CellRange& r : ordered.ranges) total += volume(r);
+    for (std::size_t p = 0; p < n; ++p) total += volume(range_of(p));
     check_ref_count(total);
     const int nx = g.res[0], ny = g.res[1], nz = g.res[2];
     if (total > 8 * n + 3 * cells) {
-      for (const CellRange& r : ordered.ranges)
+      for (std::size_t p = 0; p < n; ++p) {
+        const CellRange r = range_of(p);
         for (unsigned corner = 0; corner < 8; ++corner) {
           const int i = corner & 1u ? r.hi[0] + 1 : r.lo[0];
           const int j = corner & 2u ? r.hi[1] + 1 : r.lo[1];
@@ -215,6 +212,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           if (i == nx || j == ny || k == nz) continue;
           cursor[g.index(i, j, k)] += std::popcount(corner) % 2 == 0 ? 1u : ~0u;
         }
+      }
       const std::size_t row_cells = std::size_t(nx), slab_cells = row_cells * std::size_t(ny);
       for (std::size_t base = 0; base < cells; base += row_cells)
         for (std::size_t i = 1; i < row_cells; ++i) cursor[base + i] += cursor[base + i - 1];
@@ -222,8 +220,8 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
         for (std::size_t c = base + row_cells; c < base + slab_cells; ++c) cursor[c] += cursor[c - row_cells];
       for (std::size_t c = slab_cells; c < cells; ++c) cursor[c] += cursor[c - slab_cells];
     } else {
-      for (const CellRange& r : ordered.ranges) {
-        const CellRange c = r;  // a copy: the counts are ints too, and would alias it
+      for (std::size_t p = 0; p < n; ++p) {
+        const CellRange c = range_of(p);
         for (int k = c.lo[2]; k <= c.hi[2]; ++k)
           for (int j = c.lo[1]; j <= c.hi[1]; ++j) {
             std::uint32_t* row = cursor + g.index(0, j, k);
@@ -237,7 +235,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     std::uint32_t* refs = out.refs.data();
     for (std::size_t p = n; p-- > 0;) {
       const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
-      const CellRange r = ordered.ranges[p];
+      const CellRange r = range_of(p);
       for (int k = r.lo[2]; k <= r.hi[2]; ++k)
         for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
           std::uint32_t* row = cursor + g.index(0, j, k);
@@ -254,15 +252,22 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     const int nx = g.res[0];
     std::uint32_t* cursor = out.offsets.data();
     auto rows_of = [&](std::size_t p, auto&& row) {
-      const CellRange& r = ordered.ranges[p];
-      if (!gather || (r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2])) {
+      const CellRange r = range_of(p);
+      if ((r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2]) || (!gather && scene.is_sphere(prims[p]))) {
         for (int k = r.lo[2]; k <= r.hi[2]; ++k)
           for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
         return;
       }
-      const CellTriangles::Triangle& t = visit_tris.tris[p];
-      const Vec3f tri[3] = {t.v0, t.v1, t.v2};
-      for_each_clipped_row(g, tri, r, margin, row);
+      if (gather) {
+        const CellTriangles::Triangle& t = visit_tris.tris[p];
+        const Vec3f tri[3] = {t.v0, t.v1, t.v2};
+        for_each_clipped_row(g, tri, r, margin, row);
+      } else {
+        const auto& t = scene.mesh.triangles[prims[p]];
+        const auto& v = scene.mesh.vertices;
+        const Vec3f tri[3] = {v[t[0]], v[t[1]], v[t[2]]};
+        for_each_clipped_row(g, tri, r, margin, row);
+      }
     };
     std::size_t total = 0;
     for (std::size_t p = 0; p < n; ++p)
@@ -294,7 +299,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   pairs.reserve(n * 2);
   for (std::size_t p = 0; p < n; ++p) {
     const std::uint32_t prim = prims[p];
-    const CellRange& r = ordered.ranges[p];
+    const CellRange r = range_of(p);
     const bool single = r.lo[0] == r.hi[0] && r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2];
     for (int k = r.lo[2]; k <= r.hi[2]; ++k)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j)
