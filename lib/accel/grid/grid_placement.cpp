@@ -143,9 +143,12 @@ void check_ref_count(std::size_t total) {
 /// walks the cell arrays nearly sequentially instead of at random (grass lists its blades in
 /// random positions), and primitives that share cells get nearby positions. A cell lists its
 /// primitives in this order. Only one key per primitive is kept: the passes recompute cell ranges.
+/// With `copy` (a scene of triangles only), also writes the triangles in visit order to it,
+/// scattered while the scene is read in input order (sequential reads, independent writes).
 template <class PrimAt>
 std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
-                                       float margin, std::uint32_t* counts) {
+                                       float margin, std::uint32_t* counts,
+                                       std::vector<CellTriangles::Triangle>* copy) {
   BuildArray<std::uint32_t> key(n);
   for (std::size_t p = 0; p < n; ++p) {
     const Bounds3f b = prim_bounds(scene, prim_at(p));
@@ -155,7 +158,18 @@ std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt
   const std::size_t cells = g.cell_count();
   for (std::size_t c = 1; c < cells; ++c) counts[c] += counts[c - 1];
   std::vector<std::uint32_t> order(n);
-  for (std::size_t p = 0; p < n; ++p) order[counts[key[p]]++] = prim_at(p);
+  if (copy) {
+    copy->resize(n);
+    const auto& v = scene.mesh.vertices;
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::uint32_t at = counts[key[p]]++, prim = prim_at(p);
+      const auto& t = scene.mesh.triangles[prim];
+      order[at] = prim;
+      (*copy)[at] = {v[t[0]], v[t[1]], v[t[2]]};
+    }
+  } else {
+    for (std::size_t p = 0; p < n; ++p) order[counts[key[p]]++] = prim_at(p);
+  }
   std::fill(counts, counts + cells + 1, 0u);
   return order;
 }
@@ -166,13 +180,14 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   CellLists out;
   const std::size_t cells = g.cell_count();
   out.offsets.assign(cells + 1, 0);
-  std::vector<std::uint32_t> order = visit_order(scene, n, prim_at, g, margin, out.offsets.data());
   const bool local = ids == CellRefIds::visit_order;
-  // The triangles in visit order, gathered once (one random read per primitive): the reference
-  // ids of a local build, and sequential reads for clipping, which reads every triangle twice.
+  // The triangles in visit order, copied once: the reference ids of a local build, and
+  // sequential reads for the passes (clipping reads every triangle twice).
   const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
   CellTriangles visit_tris;
-  if (gather) visit_tris = copy_cell_triangles(scene, std::move(order));
+  std::vector<std::uint32_t> order =
+      visit_order(scene, n, prim_at, g, margin, out.offsets.data(), gather ? &visit_tris.tris : nullptr);
+  if (gather) visit_tris.prim_of = std::move(order);
   const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
   // The cell range of the p-th primitive visited, from its copied triangle when there is one.
   auto range_of = [&](std::size_t p) {
