@@ -198,11 +198,33 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     b.extend(t.v2);
     return cell_range(g, b, margin);
   };
+  // Calls row(j, k, i_lo, i_hi) for the rows of cells of the bounding box of primitive p.
+  auto bbox_rows = [&](std::size_t p, auto&& row) {
+    const CellRange r = range_of(p);
+    for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+      for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
+  };
+  // The fill of a two-pass placement whose counts are in offsets[c]: an inclusive prefix sum
+  // makes offsets[c] the end of cell c, and filling backwards (last primitive first) over the
+  // rows rows_of(p, row) reports leaves it at the start, with every cell's list in visiting order.
+  auto fill = [&](std::size_t total, auto&& rows_of) {
+    std::uint32_t* cursor = out.offsets.data();
+    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
+    out.offsets[cells] = static_cast<std::uint32_t>(total);
+    out.refs.resize(total);
+    std::uint32_t* refs = out.refs.data();
+    for (std::size_t p = n; p-- > 0;) {
+      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
+      rows_of(p, [&](int j, int k, int ilo, int ihi) {
+        std::uint32_t* row = cursor + g.index(0, j, k);
+        for (int i = ilo; i <= ihi; ++i) refs[--row[i]] = ref;
+      });
+    }
+    if (local) out.triangles = std::move(visit_tris);
+  };
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
-    // Counting sort without a shift pass: counts go to offsets[c], an inclusive prefix sum makes
-    // offsets[c] the end of cell c, and filling backwards (last primitive first) leaves it at the
-    // start, with every cell's list in visiting order.
+    // Counting sort without a shift pass: counts go to offsets[c], then the fill.
     //
     // Where references outnumber 8 per primitive plus 3 per cell, the counts come from a 3D
     // difference array instead of one increment per reference: +1 and -1 at the 8 corners of
@@ -244,35 +266,18 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           }
       }
     }
-    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
-    out.offsets[cells] = static_cast<std::uint32_t>(total);
-    out.refs.resize(total);
-    std::uint32_t* refs = out.refs.data();
-    for (std::size_t p = n; p-- > 0;) {
-      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
-      const CellRange r = range_of(p);
-      for (int k = r.lo[2]; k <= r.hi[2]; ++k)
-        for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
-          std::uint32_t* row = cursor + g.index(0, j, k);
-          for (int i = r.lo[0]; i <= r.hi[0]; ++i) refs[--row[i]] = ref;
-        }
-    }
-    if (local) out.triangles = std::move(visit_tris);
+    fill(total, bbox_rows);
     return out;
   }
   if (placement == GridPlacement::clipped) {
     // Two passes over the clipped rows: counts by a difference array along each row (+1 at the
-    // row range's first cell, -1 past its last), prefix sums along x and over all cells, then the
-    // fill backwards as for bbox.
+    // row range's first cell, -1 past its last) and prefix sums along x, then the fill.
     const int nx = g.res[0];
     std::uint32_t* cursor = out.offsets.data();
     auto rows_of = [&](std::size_t p, auto&& row) {
       const CellRange r = range_of(p);
-      if ((r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2]) || (!gather && scene.is_sphere(prims[p]))) {
-        for (int k = r.lo[2]; k <= r.hi[2]; ++k)
-          for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
-        return;
-      }
+      if ((r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2]) || (!gather && scene.is_sphere(prims[p])))
+        return bbox_rows(p, row);
       if (gather) {
         const CellTriangles::Triangle& t = visit_tris.tris[p];
         const Vec3f tri[3] = {t.v0, t.v1, t.v2};
@@ -295,18 +300,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     check_ref_count(total);
     for (std::size_t base = 0; base < cells; base += std::size_t(nx))
       for (std::size_t i = 1; i < std::size_t(nx); ++i) cursor[base + i] += cursor[base + i - 1];
-    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
-    out.offsets[cells] = static_cast<std::uint32_t>(total);
-    out.refs.resize(total);
-    std::uint32_t* refs = out.refs.data();
-    for (std::size_t p = n; p-- > 0;) {
-      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
-      rows_of(p, [&](int j, int k, int ilo, int ihi) {
-        std::uint32_t* cells_row = cursor + g.index(0, j, k);
-        for (int i = ilo; i <= ihi; ++i) refs[--cells_row[i]] = ref;
-      });
-    }
-    if (local) out.triangles = std::move(visit_tris);
+    fill(total, rows_of);
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.
