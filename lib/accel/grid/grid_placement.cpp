@@ -66,9 +66,10 @@ inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, int axis, float boun
 
 /// Calls row(j, k, i_lo, i_hi) for the rows of cells (j, k) of range `r` that a triangle's part
 /// in them reaches, with the x-range of cells that part spans: the triangle clipped to each
-/// slab k widened by 2·margin, then to each row j widened by 2·margin. The extra margin covers the
-/// float rounding of the clipping (a few ulps of the coordinates, far below the margin), so
-/// the rows and ranges include every cell whose box widened by `margin` the triangle meets.
+/// slab k widened by 2·margin, then to each row j widened by 2·margin, and the part's y- and
+/// x-extents widened by 2·margin. The extra margin covers the float rounding of the clipping (a
+/// few ulps of the coordinates, far below the margin), so the rows and ranges include every
+/// cell whose box widened by `margin` the triangle meets (and lie within the bounding box's).
 template <class Row>
 inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
                                  Row&& row) {
@@ -84,7 +85,7 @@ inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], c
     }
     float ylo = slab[0].y, yhi = slab[0].y;
     for (int v = 1; v < ns; ++v) ylo = std::min(ylo, slab[v].y), yhi = std::max(yhi, slab[v].y);
-    const int jlo = std::max(r.lo[1], g.cell_of(1, ylo - margin)), jhi = std::min(r.hi[1], g.cell_of(1, yhi + margin));
+    const int jlo = std::max(r.lo[1], g.cell_of(1, ylo - slack)), jhi = std::min(r.hi[1], g.cell_of(1, yhi + slack));
     for (int j = jlo; j <= jhi; ++j) {
       const Vec3f* part = slab;
       int nr = ns;
@@ -96,7 +97,7 @@ inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], c
       }
       float xlo = part[0].x, xhi = part[0].x;
       for (int v = 1; v < nr; ++v) xlo = std::min(xlo, part[v].x), xhi = std::max(xhi, part[v].x);
-      const int ilo = std::max(r.lo[0], g.cell_of(0, xlo - margin)), ihi = std::min(r.hi[0], g.cell_of(0, xhi + margin));
+      const int ilo = std::max(r.lo[0], g.cell_of(0, xlo - slack)), ihi = std::min(r.hi[0], g.cell_of(0, xhi + slack));
       if (ilo <= ihi) row(j, k, ilo, ihi);
     }
   }
