@@ -142,7 +142,9 @@ TEST(GridBuild, ResolutionFollowsTheLectureHeuristic) {
 
 TEST(GridBuild, CompactStorageAndStats) {
   const auto scene = make_scene("grass:blades=2000");
-  UniformGrid bbox(scene, GridConfig{});
+  GridConfig bbox_cfg;
+  bbox_cfg.placement = GridPlacement::bbox;
+  UniformGrid bbox(scene, bbox_cfg);
   GridConfig exact_cfg;
   exact_cfg.placement = GridPlacement::exact;
   UniformGrid exact(scene, exact_cfg);
@@ -166,6 +168,7 @@ TEST(GridBuild, BboxCellCountsMatchTheCellRangesOfTheBoundingBoxes) {
   for (const double d : {3.0, 0.5}) {
     GridConfig cfg;
     cfg.density = d;
+    cfg.placement = GridPlacement::bbox;
     const UniformGrid grid(scene, cfg);
     const GridGeometry& g = grid.geometry();
     const float margin = grid_margin(scene->bounds());
@@ -192,7 +195,7 @@ TEST(GridBuild, BboxCellCountsMatchTheCellRangesOfTheBoundingBoxes) {
 // be its primitive's triangle.
 TEST(GridBuild, CopiedTrianglesMapBackToThePlacedPrimitives) {
   const auto scene = make_scene("grass:blades=3000");
-  for (const GridPlacement placement : {GridPlacement::bbox, GridPlacement::exact}) {
+  for (const GridPlacement placement : {GridPlacement::bbox, GridPlacement::exact, GridPlacement::clipped}) {
     GridConfig cfg;
     cfg.placement = placement;
     const UniformGrid grid(scene, cfg);
@@ -215,6 +218,34 @@ TEST(GridBuild, CopiedTrianglesMapBackToThePlacedPrimitives) {
       std::sort(mapped.begin(), mapped.end());
       std::sort(placed.begin(), placed.end());
       ASSERT_EQ(mapped, placed) << "cell " << c;
+    }
+  }
+}
+
+// Clipped placement keeps every cell exact placement keeps (the cells the triangle meets, widened by
+// the margin) and no cell outside the bounding box's: per cell, exact ⊆ clipped ⊆ bbox as sets, on
+// tilted thin blades, a soup of random triangles, long needles and axis-aligned walls.
+TEST(GridBuild, ClippedCellsLieBetweenExactAndBbox) {
+  for (const std::string spec : {"grass:blades=800,height=0.4,width=0.03", "soup:n=800", "needles:n=150", "walls:n=20", "walls:n=20,angle=0"}) {
+    const auto scene = make_scene(spec);
+    const float margin = grid_margin(scene->bounds());
+    const Bounds3f box = widened(scene->bounds(), margin);
+    const GridGeometry g(box, grid_resolution(box, static_cast<double>(scene->primitive_count()), 4.0, 1 << 27));
+    auto lists = [&](GridPlacement placement) {
+      return place_all_primitives(*scene, g, placement, margin, CellRefIds::primitive);
+    };
+    const CellLists exact = lists(GridPlacement::exact), clipped = lists(GridPlacement::clipped),
+                    bbox = lists(GridPlacement::bbox);
+    auto cell_set = [](const CellLists& l, std::size_t c) {
+      std::vector<std::uint32_t> v(l.refs.begin() + l.offsets[c], l.refs.begin() + l.offsets[c + 1]);
+      std::sort(v.begin(), v.end());
+      return v;
+    };
+    EXPECT_LT(clipped.refs.size(), bbox.refs.size()) << spec;
+    for (std::size_t c = 0; c < g.cell_count(); ++c) {
+      const auto e = cell_set(exact, c), k = cell_set(clipped, c), b = cell_set(bbox, c);
+      ASSERT_TRUE(std::includes(k.begin(), k.end(), e.begin(), e.end())) << spec << ", cell " << c;
+      ASSERT_TRUE(std::includes(b.begin(), b.end(), k.begin(), k.end())) << spec << ", cell " << c;
     }
   }
 }

@@ -128,8 +128,8 @@ std::vector<AccelKind> make_registry() {
          return scene->instanced() ? make_instanced_for_kernel(c.kernel, *scene, make) : make(std::move(scene));
        },
        [](SpecReader& r) { return grid_accuracy(read_grid_config(r)); },
-       {"place=exact", "mailbox=off", "accept=first", "d=0.5", "d=8", "kernel=certified",
-        "kernel=certified,place=exact,mailbox=off"}});
+       {"place=exact", "place=bbox", "mailbox=off", "accept=first", "d=0.5", "d=8", "kernel=certified",
+        "kernel=certified,place=exact,mailbox=off", "kernel=certified,place=bbox"}});
   kinds.push_back(
       {"nested-grid",
        "grids in crowded cells (the lecture's nested grid) or the two-level grid of Kalojanov et al. 2011",
@@ -142,7 +142,8 @@ std::vector<AccelKind> make_registry() {
          return scene->instanced() ? make_instanced_for_kernel(c.cells.kernel, *scene, make) : make(std::move(scene));
        },
        [](SpecReader& r) { return grid_accuracy(read_nested_grid_config(r).cells); },
-       {"mode=two-level", "place=exact", "mailbox=off", "accept=first", "threshold=4,depth=3", "kernel=certified"}});
+       {"mode=two-level", "place=exact", "place=bbox", "mailbox=off", "accept=first", "threshold=4,depth=3",
+        "kernel=certified"}});
   return kinds;
 }
 

@@ -200,4 +200,40 @@ struct AnyHitInCells {
   }
 };
 
+/// The grid's part of a closest-hit query shared by the uniform and the nested grid: `walk(state)`
+/// runs the 3D-DDA over the ray's clipped interval (ending at t1) with a ClosestHitInCells state;
+/// with the certified kernel, a ray whose DDA could leave the placement margin `margin` of the
+/// grid box `box` (dda_within_margin) is offered every primitive instead. On a hit, writes `hit`
+/// and sets ray.tmax to its t.
+template <class Kernel, class Counters, bool kMailbox, class Walk>
+inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, float t1,
+                                const Bounds3f& box, float margin, GridAcceptance acceptance, float extent,
+                                Counters& counters, Walk&& walk) {
+  bool found;
+  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(ray, t1, box, margin)) {
+    ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(ray, extent),
+                                                        counters);
+    walk(state);
+    found = state.found;
+    if (found) hit = state.hit;
+  } else {
+    found = certified_over_all_primitives<false>(scene, ray, hit, counters);
+  }
+  if (found) ray.tmax = hit.t;
+  return found;
+}
+
+/// The any-hit counterpart of closest_hit_in_grid: `walk(state)` with an AnyHitInCells state,
+/// returning whether it found a hit; `ray` is any_hit_ray of the query.
+template <class Kernel, class Counters, bool kMailbox, class Walk>
+inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, float t1,
+                            const Bounds3f& box, float margin, Counters& counters, Walk&& walk) {
+  if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(ray, t1, box, margin)) {
+    Hit hit;
+    return certified_over_all_primitives<true>(scene, ray, hit, counters);
+  }
+  AnyHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, counters);
+  return walk(state);
+}
+
 }  // namespace raylab

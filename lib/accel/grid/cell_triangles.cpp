@@ -16,11 +16,12 @@ CellTriangles copy_cell_triangles(const Scene& scene, std::vector<std::uint32_t>
   return out;
 }
 
-CellTriangles renumber_cell_triangles(const Scene& scene, std::vector<std::uint32_t>& refs) {
+CellTriangles renumber_cell_triangles(const Scene& scene, std::uint32_t* refs, std::size_t n) {
   if (!scene.spheres.empty()) return {};
   std::vector<std::uint32_t> local_of(scene.primitive_count(), kInvalidId);
   std::vector<std::uint32_t> prim_of;
-  for (std::uint32_t& r : refs) {
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t& r = refs[i];
     std::uint32_t& local = local_of[r];
     if (local == kInvalidId) {
       local = static_cast<std::uint32_t>(prim_of.size());

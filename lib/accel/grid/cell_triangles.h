@@ -26,9 +26,9 @@ static_assert(sizeof(CellTriangles::Triangle) == 36);
 /// The triangles of `scene` (which holds no sphere) with local ids 0, 1, ... in the order of `prim_of`.
 CellTriangles copy_cell_triangles(const Scene& scene, std::vector<std::uint32_t> prim_of);
 
-/// Renumbers the primitive ids in `refs` to local ids, 0, 1, ... in order of first appearance,
-/// and returns the copied triangles. A scene that holds a sphere is left as it is (the result is
-/// empty and `refs` keeps the scene's ids): cells then test the scene's primitives.
-CellTriangles renumber_cell_triangles(const Scene& scene, std::vector<std::uint32_t>& refs);
+/// Renumbers the primitive ids in refs[0, n) to local ids, 0, 1, ... in order of first
+/// appearance, and returns the copied triangles. A scene that holds a sphere is left as it is (the
+/// result is empty and `refs` keeps the scene's ids): cells then test the scene's primitives.
+CellTriangles renumber_cell_triangles(const Scene& scene, std::uint32_t* refs, std::size_t n);
 
 }  // namespace raylab

@@ -12,6 +12,11 @@ namespace raylab {
 enum class GridPlacement {
   bbox,   ///< every cell the primitive's bounding box overlaps
   exact,  ///< only cells the primitive itself meets (CGAL's exact Triangle_3/Bbox_3 predicate)
+  /// Cells the triangle's part in each row of cells spans: the triangle clipped to each slab
+  /// of cells along z, then to each row along y (Sutherland and Hodgman 1974), in float, gives
+  /// the x-range of its cells in that row. The cells the triangle meets, up to a slack of one
+  /// placement margin (spheres: bbox).
+  clipped,
 };
 
 /// What a cell does with a hit that lies outside it (the lecture's "objects overlapping multiple cells").
@@ -24,7 +29,9 @@ struct GridConfig {
   /// The lecture's density: max(nx, ny, nz) = d·∛n, the other axes in proportion to their
   /// extent (each at least 1). The lecture suggests d ≈ 3.
   double density = 3.0;
-  GridPlacement placement = GridPlacement::bbox;
+  /// clipped: on grass of a million blades about 6x fewer references and tests per ray than
+  /// bbox at the same build cost (exp_grids, "Placement").
+  GridPlacement placement = GridPlacement::clipped;
   GridAcceptance acceptance = GridAcceptance::in_cell;
   /// Per-ray mailbox (mailbox.h): a primitive already tested by this ray is not tested again.
   bool mailbox = true;

@@ -44,6 +44,65 @@ inline CellRange cell_range(const GridGeometry& g, const Bounds3f& b, float marg
   return r;
 }
 
+/// Sutherland-Hodgman: the part of the convex polygon in[0, n) with x[axis] >= bound (keep_above)
+/// or <= bound, written to out (at most n + 1 vertices); returns its vertex count.
+inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, int axis, float bound, bool keep_above) {
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec3f& a = in[i];
+    const Vec3f& b = in[i + 1 == n ? 0 : i + 1];
+    const float da = keep_above ? a[axis] - bound : bound - a[axis];
+    const float db = keep_above ? b[axis] - bound : bound - b[axis];
+    if (da >= 0.0f) out[m++] = a;
+    if ((da < 0.0f) != (db < 0.0f)) {
+      const float t = std::clamp(da / (da - db), 0.0f, 1.0f);
+      Vec3f p = a + (b - a) * t;
+      p[axis] = bound;
+      out[m++] = p;
+    }
+  }
+  return m;
+}
+
+/// Calls row(j, k, i_lo, i_hi) for the rows of cells (j, k) of range `r` that a triangle's part
+/// in them reaches, with the x-range of cells that part spans: the triangle clipped to each
+/// slab k widened by 2·margin, then to each row j widened by 2·margin, and the part's y- and
+/// x-extents widened by 2·margin. The extra margin covers the float rounding of the clipping (a
+/// few ulps of the coordinates, far below the margin), so the rows and ranges include every
+/// cell whose box widened by `margin` the triangle meets (and lie within the bounding box's).
+template <class Row>
+inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
+                                 Row&& row) {
+  const float slack = 2.0f * margin;
+  Vec3f slab[8], tmp[8], cell_row[8];
+  for (int k = r.lo[2]; k <= r.hi[2]; ++k) {
+    int ns = 3;
+    std::copy(tri, tri + 3, slab);
+    if (r.lo[2] != r.hi[2]) {
+      ns = clip_polygon(tri, 3, tmp, 2, g.plane(2, k) - slack, true);
+      ns = clip_polygon(tmp, ns, slab, 2, g.plane(2, k + 1) + slack, false);
+      if (ns == 0) continue;
+    }
+    float ylo = slab[0].y, yhi = slab[0].y;
+    for (int v = 1; v < ns; ++v) ylo = std::min(ylo, slab[v].y), yhi = std::max(yhi, slab[v].y);
+    const int jlo = std::max(r.lo[1], g.cell_of(1, ylo - slack)), jhi = std::min(r.hi[1], g.cell_of(1, yhi + slack));
+    for (int j = jlo; j <= jhi; ++j) {
+      const Vec3f* part = slab;
+      int nr = ns;
+      if (jlo != jhi) {
+        nr = clip_polygon(slab, ns, tmp, 1, g.plane(1, j) - slack, true);
+        nr = clip_polygon(tmp, nr, cell_row, 1, g.plane(1, j + 1) + slack, false);
+        if (nr == 0) continue;
+        part = cell_row;
+      }
+      float xlo = part[0].x, xhi = part[0].x;
+      for (int v = 1; v < nr; ++v) xlo = std::min(xlo, part[v].x), xhi = std::max(xhi, part[v].x);
+      const int ilo = std::max(r.lo[0], g.cell_of(0, xlo - slack)), ihi = std::min(r.hi[0], g.cell_of(0, xhi + slack));
+      if (ilo <= ihi) row(j, k, ilo, ihi);
+    }
+  }
+}
+
 inline Bounds3f prim_bounds(const Scene& s, std::uint32_t prim) {
   if (s.is_sphere(prim)) return s.sphere(prim).bounds();
   const auto& t = s.mesh.triangles[prim];
@@ -79,55 +138,94 @@ void check_ref_count(std::size_t total) {
                      " cell references overflow 32-bit offsets; lower the density d or use place=exact");
 }
 
-/// The primitives' cell ranges, in the order placement visits them: by the index of their
-/// lowest cell (row (j, k), then column i), two stable counting sorts (by i, then by row). Cells
-/// are stored in index order, so visiting primitives in this order walks the cell arrays nearly
-/// sequentially instead of at random (grass lists its blades in random positions), and
-/// primitives that share cells get nearby positions. A cell lists its primitives in this order.
-struct OrderedRanges {
-  std::vector<std::uint32_t> prims;
-  BuildArray<CellRange> ranges;
-};
-
+/// The order placement visits primitives in: by the index of their bounds' lowest cell (row
+/// (j, k), then column i), a stable counting sort in `counts` (cell_count + 1 entries, zero on
+/// entry and on return). Cells are stored in index order, so visiting primitives in this order
+/// walks the cell arrays nearly sequentially instead of at random (grass lists its blades in
+/// random positions), and primitives that share cells get nearby positions. A cell lists its
+/// primitives in this order. Only one key per primitive is kept: the passes recompute cell ranges.
+/// With `copy` (a scene of triangles only), also writes the triangles in visit order to it,
+/// scattered while the scene is read in input order (sequential reads, independent writes).
 template <class PrimAt>
-OrderedRanges ordered_ranges(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, float margin) {
-  BuildArray<CellRange> by_input(n);
-  const std::size_t rows = std::size_t(g.res[1]) * std::size_t(g.res[2]);
-  std::vector<std::uint32_t> column_start(std::size_t(g.res[0]) + 1, 0), row_start(rows + 1, 0);
-  auto row_of = [&](const CellRange& r) { return std::size_t(r.lo[2]) * g.res[1] + r.lo[1]; };
+std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
+                                       float margin, std::uint32_t* counts,
+                                       std::vector<CellTriangles::Triangle>* copy) {
+  BuildArray<std::uint32_t> key(n);
   for (std::size_t p = 0; p < n; ++p) {
-    by_input[p] = cell_range(g, prim_bounds(scene, prim_at(p)), margin);
-    ++column_start[std::size_t(by_input[p].lo[0]) + 1];
-    ++row_start[row_of(by_input[p]) + 1];
+    const Bounds3f b = prim_bounds(scene, prim_at(p));
+    key[p] = g.index(g.cell_of(0, b.lo.x - margin), g.cell_of(1, b.lo.y - margin), g.cell_of(2, b.lo.z - margin));
+    ++counts[key[p] + 1];
   }
-  for (int i = 0; i < g.res[0]; ++i) column_start[i + 1] += column_start[i];
-  for (std::size_t r = 0; r < rows; ++r) row_start[r + 1] += row_start[r];
-  BuildArray<std::uint32_t> by_column(n);
-  for (std::size_t p = 0; p < n; ++p) by_column[column_start[by_input[p].lo[0]]++] = static_cast<std::uint32_t>(p);
-  OrderedRanges out;
-  out.prims.resize(n);
-  out.ranges.resize(n);
-  for (const std::uint32_t p : by_column) {
-    const std::uint32_t at = row_start[row_of(by_input[p])]++;
-    out.prims[at] = prim_at(p);
-    out.ranges[at] = by_input[p];
+  const std::size_t cells = g.cell_count();
+  for (std::size_t c = 1; c < cells; ++c) counts[c] += counts[c - 1];
+  std::vector<std::uint32_t> order(n);
+  if (copy) {
+    copy->resize(n);
+    const auto& v = scene.mesh.vertices;
+    for (std::size_t p = 0; p < n; ++p) {
+      const std::uint32_t at = counts[key[p]]++, prim = prim_at(p);
+      const auto& t = scene.mesh.triangles[prim];
+      order[at] = prim;
+      (*copy)[at] = {v[t[0]], v[t[1]], v[t[2]]};
+    }
+  } else {
+    for (std::size_t p = 0; p < n; ++p) order[counts[key[p]]++] = prim_at(p);
   }
-  return out;
+  std::fill(counts, counts + cells + 1, 0u);
+  return order;
 }
 
 template <class PrimAt>
 CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g, GridPlacement placement,
                 float margin, CellRefIds ids) {
-  OrderedRanges ordered = ordered_ranges(scene, n, prim_at, g, margin);
-  const bool local = ids == CellRefIds::visit_order;
   CellLists out;
   const std::size_t cells = g.cell_count();
   out.offsets.assign(cells + 1, 0);
+  const bool local = ids == CellRefIds::visit_order;
+  // The triangles in visit order, copied once: the reference ids of a local build, and
+  // sequential reads for the passes (clipping reads every triangle twice).
+  const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
+  CellTriangles visit_tris;
+  std::vector<std::uint32_t> order =
+      visit_order(scene, n, prim_at, g, margin, out.offsets.data(), gather ? &visit_tris.tris : nullptr);
+  if (gather) visit_tris.prim_of = std::move(order);
+  const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
+  // The cell range of the p-th primitive visited, from its copied triangle when there is one.
+  auto range_of = [&](std::size_t p) {
+    if (!gather) return cell_range(g, prim_bounds(scene, prims[p]), margin);
+    const CellTriangles::Triangle& t = visit_tris.tris[p];
+    Bounds3f b(t.v0);
+    b.extend(t.v1);
+    b.extend(t.v2);
+    return cell_range(g, b, margin);
+  };
+  // Calls row(j, k, i_lo, i_hi) for the rows of cells of the bounding box of primitive p.
+  auto bbox_rows = [&](std::size_t p, auto&& row) {
+    const CellRange r = range_of(p);
+    for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+      for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
+  };
+  // The fill of a two-pass placement whose counts are in offsets[c]: an inclusive prefix sum
+  // makes offsets[c] the end of cell c, and filling backwards (last primitive first) over the
+  // rows rows_of(p, row) reports leaves it at the start, with every cell's list in visiting order.
+  auto fill = [&](std::size_t total, auto&& rows_of) {
+    std::uint32_t* cursor = out.offsets.data();
+    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
+    out.offsets[cells] = static_cast<std::uint32_t>(total);
+    out.refs.resize(total);
+    std::uint32_t* refs = out.refs.data();
+    for (std::size_t p = n; p-- > 0;) {
+      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
+      rows_of(p, [&](int j, int k, int ilo, int ihi) {
+        std::uint32_t* row = cursor + g.index(0, j, k);
+        for (int i = ilo; i <= ihi; ++i) refs[--row[i]] = ref;
+      });
+    }
+    if (local) out.triangles = std::move(visit_tris);
+  };
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
-    // Counting sort without a shift pass: counts go to offsets[c], an inclusive prefix sum makes
-    // offsets[c] the end of cell c, and filling backwards (last primitive first) leaves it at the
-    // start, with every cell's list in visiting order.
+    // Counting sort without a shift pass: counts go to offsets[c], then the fill.
     //
     // Where references outnumber 8 per primitive plus 3 per cell, the counts come from a 3D
     // difference array instead of one increment per reference: +1 and -1 at the 8 corners of
@@ -139,11 +237,12 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
       return std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
     };
     std::size_t total = 0;
-    for (const CellRange& r : ordered.ranges) total += volume(r);
+    for (std::size_t p = 0; p < n; ++p) total += volume(range_of(p));
     check_ref_count(total);
     const int nx = g.res[0], ny = g.res[1], nz = g.res[2];
     if (total > 8 * n + 3 * cells) {
-      for (const CellRange& r : ordered.ranges)
+      for (std::size_t p = 0; p < n; ++p) {
+        const CellRange r = range_of(p);
         for (unsigned corner = 0; corner < 8; ++corner) {
           const int i = corner & 1u ? r.hi[0] + 1 : r.lo[0];
           const int j = corner & 2u ? r.hi[1] + 1 : r.lo[1];
@@ -151,6 +250,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           if (i == nx || j == ny || k == nz) continue;
           cursor[g.index(i, j, k)] += std::popcount(corner) % 2 == 0 ? 1u : ~0u;
         }
+      }
       const std::size_t row_cells = std::size_t(nx), slab_cells = row_cells * std::size_t(ny);
       for (std::size_t base = 0; base < cells; base += row_cells)
         for (std::size_t i = 1; i < row_cells; ++i) cursor[base + i] += cursor[base + i - 1];
@@ -158,8 +258,8 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
         for (std::size_t c = base + row_cells; c < base + slab_cells; ++c) cursor[c] += cursor[c - row_cells];
       for (std::size_t c = slab_cells; c < cells; ++c) cursor[c] += cursor[c - slab_cells];
     } else {
-      for (const CellRange& r : ordered.ranges) {
-        const CellRange c = r;  // a copy: the counts are ints too, and would alias it
+      for (std::size_t p = 0; p < n; ++p) {
+        const CellRange c = range_of(p);
         for (int k = c.lo[2]; k <= c.hi[2]; ++k)
           for (int j = c.lo[1]; j <= c.hi[1]; ++j) {
             std::uint32_t* row = cursor + g.index(0, j, k);
@@ -167,28 +267,49 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           }
       }
     }
-    for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
-    out.offsets[cells] = static_cast<std::uint32_t>(total);
-    out.refs.resize(total);
-    std::uint32_t* refs = out.refs.data();
-    for (std::size_t p = n; p-- > 0;) {
-      const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : ordered.prims[p];
-      const CellRange r = ordered.ranges[p];
-      for (int k = r.lo[2]; k <= r.hi[2]; ++k)
-        for (int j = r.lo[1]; j <= r.hi[1]; ++j) {
-          std::uint32_t* row = cursor + g.index(0, j, k);
-          for (int i = r.lo[0]; i <= r.hi[0]; ++i) refs[--row[i]] = ref;
-        }
-    }
-    if (local) out.visit_order = std::move(ordered.prims);
+    fill(total, bbox_rows);
+    return out;
+  }
+  if (placement == GridPlacement::clipped) {
+    // Two passes over the clipped rows: counts by a difference array along each row (+1 at the
+    // row range's first cell, -1 past its last) and prefix sums along x, then the fill.
+    const int nx = g.res[0];
+    std::uint32_t* cursor = out.offsets.data();
+    auto rows_of = [&](std::size_t p, auto&& row) {
+      const CellRange r = range_of(p);
+      if ((r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2]) || (!gather && scene.is_sphere(prims[p])))
+        return bbox_rows(p, row);
+      if (gather) {
+        const CellTriangles::Triangle& t = visit_tris.tris[p];
+        const Vec3f tri[3] = {t.v0, t.v1, t.v2};
+        for_each_clipped_row(g, tri, r, margin, row);
+      } else {
+        const auto& t = scene.mesh.triangles[prims[p]];
+        const auto& v = scene.mesh.vertices;
+        const Vec3f tri[3] = {v[t[0]], v[t[1]], v[t[2]]};
+        for_each_clipped_row(g, tri, r, margin, row);
+      }
+    };
+    std::size_t total = 0;
+    for (std::size_t p = 0; p < n; ++p)
+      rows_of(p, [&](int j, int k, int ilo, int ihi) {
+        std::uint32_t* cells_row = cursor + g.index(0, j, k);
+        ++cells_row[ilo];
+        if (ihi + 1 < nx) --cells_row[ihi + 1];
+        total += std::size_t(ihi - ilo + 1);
+      });
+    check_ref_count(total);
+    for (std::size_t base = 0; base < cells; base += std::size_t(nx))
+      for (std::size_t i = 1; i < std::size_t(nx); ++i) cursor[base + i] += cursor[base + i - 1];
+    fill(total, rows_of);
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   pairs.reserve(n * 2);
   for (std::size_t p = 0; p < n; ++p) {
-    const std::uint32_t prim = ordered.prims[p];
-    const CellRange& r = ordered.ranges[p];
+    const std::uint32_t prim = prims[p];
+    const CellRange r = range_of(p);
     const bool single = r.lo[0] == r.hi[0] && r.lo[1] == r.hi[1] && r.lo[2] == r.hi[2];
     for (int k = r.lo[2]; k <= r.hi[2]; ++k)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j)
@@ -202,7 +323,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   out.refs.resize(pairs.size());
   std::vector<std::uint32_t> cursor(out.offsets.begin(), out.offsets.end() - 1);
   for (const auto& pr : pairs) out.refs[cursor[pr.first]++] = pr.second;
-  if (local) out.visit_order = std::move(ordered.prims);
+  if (local) out.triangles = std::move(visit_tris);
   return out;
 }
 

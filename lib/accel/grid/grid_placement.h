@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "accel/common/build_array_allocator.h"
+#include "accel/grid/cell_triangles.h"
 #include "accel/grid/grid_config.h"
 #include "accel/grid/grid_geometry.h"
 #include "scene/scene.h"
@@ -14,14 +15,14 @@ namespace raylab {
 /// What the references of cell lists are.
 enum class CellRefIds {
   primitive,    ///< the scene's primitive ids
-  visit_order,  ///< positions in CellLists::visit_order, the order placement visited the primitives
+  visit_order,  ///< positions in CellLists::triangles, the order placement visited the primitives (triangles only)
 };
 
 /// Cell c holds refs[offsets[c] .. offsets[c+1]).
 struct CellLists {
   BuildArray<std::uint32_t> offsets;       ///< cell_count + 1 entries
-  BuildArray<std::uint32_t> refs;          ///< primitive ids, or positions in visit_order
-  std::vector<std::uint32_t> visit_order;  ///< with CellRefIds::visit_order: the primitive ids; else empty
+  BuildArray<std::uint32_t> refs;  ///< primitive ids, or positions in `triangles`
+  CellTriangles triangles;         ///< with CellRefIds::visit_order: the triangles in visit order; else empty
 
   std::uint32_t count(std::size_t c) const { return offsets[c + 1] - offsets[c]; }
   std::size_t bytes() const { return (offsets.size() + refs.size()) * sizeof(std::uint32_t); }

@@ -7,7 +7,9 @@ namespace raylab {
 std::vector<ParamDoc> grid_cell_params() {
   return {
       {"d", "3", "density: max(nx, ny, nz) = d·∛n (the lecture's heuristic, d ≈ 3), in [0.01, 64]"},
-      {"place", "bbox", "placement: bbox (cells the bounding box overlaps) | exact (cells the primitive meets, CGAL)"},
+      {"place", "clipped",
+       "placement: bbox (cells the bounding box overlaps) | exact (cells the primitive meets, CGAL) | clipped (the "
+       "triangle clipped to each row of cells, float; spheres by bbox)"},
       {"accept", "in-cell", "in-cell (hit must lie in the cell's t-interval) | first (the lecture's mistake)"},
       {"mailbox", "on", "per-ray mailbox: on | off"},
       {"max_cells", "134217728", "cap on the cells of one grid (d is lowered to meet it), in [1, 2^30]"},
@@ -18,7 +20,8 @@ std::vector<ParamDoc> grid_cell_params() {
 GridConfig read_grid_config(SpecReader& r) {
   GridConfig c;
   c.density = r.get_double("d", 3.0, 0.01, 64.0);
-  c.placement = r.get_choice("place", "bbox", {"bbox", "exact"}) == "exact" ? GridPlacement::exact : GridPlacement::bbox;
+  const std::string place = r.get_choice("place", "clipped", {"bbox", "exact", "clipped"});
+  c.placement = place == "exact" ? GridPlacement::exact : (place == "clipped" ? GridPlacement::clipped : GridPlacement::bbox);
   c.acceptance =
       r.get_choice("accept", "in-cell", {"in-cell", "first"}) == "first" ? GridAcceptance::first : GridAcceptance::in_cell;
   c.mailbox = r.get_bool("mailbox", true);

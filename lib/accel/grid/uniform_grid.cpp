@@ -18,7 +18,7 @@ UniformGrid::UniformGrid(std::shared_ptr<const Scene> scene, const GridConfig& c
   const bool triangles_only = scene_->spheres.empty();
   lists_ = place_all_primitives(*scene_, grid_, config_.placement, margin,
                                 triangles_only ? CellRefIds::visit_order : CellRefIds::primitive);
-  if (triangles_only) tris_ = copy_cell_triangles(*scene_, std::move(lists_.visit_order));
+  tris_ = std::move(lists_.triangles);
 }
 
 std::optional<std::uint64_t> UniformGrid::structure_hash() const { return fnv1a(lists_.refs, fnv1a(lists_.offsets)); }

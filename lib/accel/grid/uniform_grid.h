@@ -60,24 +60,9 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(grid_.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    bool found;
-    if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(ray, t1, grid_.box, margin_)) {
-      ClosestHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, config_.acceptance,
-                                                          cell_widening(ray, extent_), counters);
-      const std::uint32_t* refs = lists_.refs.data();
-      const std::uint32_t* offsets = lists_.offsets.data();
-      grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
-        counters.node();
-        const std::uint32_t b = offsets[c], e = offsets[c + 1];
-        return b != e && state.leaf(refs + b, refs + e, enter, exit);
-      });
-      found = state.found;
-      if (found) hit = state.hit;
-    } else {
-      found = certified_over_all_primitives<false>(*scene_, ray, hit, counters);
-    }
-    if (found) ray.tmax = hit.t;
-    return found;
+    return closest_hit_in_grid<Kernel, Counters, kMailbox>(
+        *scene_, tris_, ray, hit, t1, grid_.box, margin_, config_.acceptance, extent_, counters,
+        [&](auto& state) { return walk(ray, inv, t0, t1, state, counters); });
   }
 
   template <class Kernel, class Counters, bool kMailbox>
@@ -86,11 +71,13 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(grid_.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(ray, t1, grid_.box, margin_)) {
-      Hit hit;
-      return certified_over_all_primitives<true>(*scene_, ray, hit, counters);
-    }
-    AnyHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, counters);
+    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, t1, grid_.box, margin_, counters,
+                                                       [&](auto& state) { return walk(ray, inv, t0, t1, state, counters); });
+  }
+
+  /// The 3D-DDA over [t0, t1], offering each non-empty cell to `state`; true when `state` stopped it.
+  template <class State, class Counters>
+  bool walk(const Ray& ray, const Vec3f& inv, float t0, float t1, State& state, Counters& counters) const {
     const std::uint32_t* refs = lists_.refs.data();
     const std::uint32_t* offsets = lists_.offsets.data();
     return grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {

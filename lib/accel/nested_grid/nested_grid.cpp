@@ -42,17 +42,38 @@ NestedGrid::NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfi
   extent_ = d.x + d.y + d.z;
   std::vector<std::uint32_t> all(scene_->primitive_count());
   std::iota(all.begin(), all.end(), 0u);
-  build_level(all.data(), all.size(), box, 0);
-  tris_ = renumber_cell_triangles(*scene_, refs_);
+  std::vector<CellLists> lists;
+  build_level(all.data(), all.size(), box, 0, lists);
+  // The leaf lists of every level gathered into one exactly sized array, each reference written
+  // once (no reallocation while levels are built).
+  std::size_t total = 0;
+  for (const Cell& cell : cells_) total += cell.count == kChild ? 0 : cell.count;
+  if (total > kChild - 1) throw InputError("nested-grid: cell references overflow 32-bit offsets; lower d or the depth");
+  refs_.resize(total);
+  std::size_t at = 0;
+  for (std::size_t gi = 0; gi < levels_.size(); ++gi) {
+    const Level& level = levels_[gi];
+    const std::uint32_t* from = lists[gi].refs.data();
+    for (std::size_t c = 0; c < level.geom.cell_count(); ++c) {
+      Cell& cell = cells_[level.cell_base + c];
+      if (cell.count == kChild) continue;
+      std::copy_n(from + cell.begin, cell.count, refs_.data() + at);
+      cell.begin = static_cast<std::uint32_t>(at);
+      at += cell.count;
+    }
+    lists[gi] = {};
+  }
+  tris_ = renumber_cell_triangles(*scene_, refs_.data(), refs_.size());
 }
 
-std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level) {
+std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level,
+                                      std::vector<CellLists>& level_lists) {
   const bool two_level = config_.mode == NestedGridMode::two_level;
   const double density =
       level > 0 ? config_.sub_density : (two_level ? config_.top_density : config_.cells.density);
   const GridGeometry geom(box, grid_resolution(box, static_cast<double>(n), density, config_.cells.max_cells));
   if (level > 0 && static_cast<double>(cells_.size() + geom.cell_count()) > cell_budget_) return kChild;
-  const CellLists lists = place_primitives(*scene_, prims, n, geom, config_.cells.placement, margin_);
+  CellLists lists = place_primitives(*scene_, prims, n, geom, config_.cells.placement, margin_);
   if (level > 0) {
     // A refinement is futile when its cells see, on average, more than half of the parent cell's
     // primitives (long or crowded primitives spanning the whole cell): the caller keeps a leaf.
@@ -63,8 +84,12 @@ std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n,
   const auto gi = static_cast<std::uint32_t>(levels_.size());
   const std::size_t base = cells_.size();
   levels_.push_back({geom, base});
+  level_lists.emplace_back();
+  if (level == 0) {
+    cell_budget_ = static_cast<double>(geom.cell_count()) + config_.cells_per_primitive_budget * double(n);
+    cells_.reserve(static_cast<std::size_t>(cell_budget_));  // address space only: levels append without copying
+  }
   cells_.resize(base + geom.cell_count());
-  if (level == 0) cell_budget_ = static_cast<double>(cells_.size()) + config_.cells_per_primitive_budget * double(n);
   const int max_level = two_level ? 1 : config_.depth;
   const std::size_t refine_above = two_level ? 1 : static_cast<std::size_t>(config_.threshold);
   for (int k = 0; k < geom.res[2]; ++k)
@@ -78,18 +103,16 @@ std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n,
           const Bounds3f child_box = widened(raylab::intersect(widened(geom.cell_box(i, j, k), margin_), content), margin_);
           const auto res = grid_resolution(child_box, cnt, config_.sub_density, config_.cells.max_cells);
           if (!child_box.empty() && std::size_t(res[0]) * res[1] * res[2] > 1) {
-            const std::uint32_t child = build_level(lists.refs.data() + b, cnt, child_box, level + 1);
+            const std::uint32_t child = build_level(lists.refs.data() + b, cnt, child_box, level + 1, level_lists);
             if (child != kChild) {
               cells_[base + c] = {child, kChild};
               continue;
             }
           }
         }
-        if (refs_.size() + cnt > kChild - 1)
-          throw InputError("nested-grid: cell references overflow 32-bit offsets; lower d or the depth");
-        cells_[base + c] = {static_cast<std::uint32_t>(refs_.size()), cnt};
-        refs_.insert(refs_.end(), lists.refs.begin() + b, lists.refs.begin() + b + cnt);
+        cells_[base + c] = {b, cnt};
       }
+  level_lists[gi] = std::move(lists);
   return gi;
 }
 

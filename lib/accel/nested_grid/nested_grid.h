@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accel/grid/cell_intersector.h"
+#include "accel/grid/grid_placement.h"
 #include "accel/grid/grid_geometry.h"
 #include "accel/grid/grid_traversal.h"
 #include "accel/nested_grid/nested_grid_config.h"
@@ -77,8 +78,10 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   };
 
   /// Builds the grid of one level over `prims` in `box` and returns its index in levels_, or
-  /// kChild when a refinement (level > 0) would be futile.
-  std::uint32_t build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level);
+  /// kChild when a refinement (level > 0) would be futile. The level's cell lists go to
+  /// lists[index], and a leaf cell's begin indexes them until the build gathers them into refs_.
+  std::uint32_t build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level,
+                            std::vector<CellLists>& lists);
 
   template <class Counters, class State>
   bool traverse(std::uint32_t gi, const Ray& ray, const Vec3f& inv, float t0, float t1, State& state,
@@ -99,34 +102,23 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   template <class Kernel, class Counters, bool kMailbox>
   bool closest(Ray& ray, Hit& hit, Counters& counters) const {
     const Vec3f inv = safe_inverse(ray.dir);
+    const Bounds3f& box = levels_[0].geom.box;
     float t0, t1;
-    if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    bool found;
-    if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(ray, t1, levels_[0].geom.box, margin_)) {
-      ClosestHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, config_.cells.acceptance,
-                                                          cell_widening(ray, extent_), counters);
-      traverse(0, ray, inv, t0, t1, state, counters);
-      found = state.found;
-      if (found) hit = state.hit;
-    } else {
-      found = certified_over_all_primitives<false>(*scene_, ray, hit, counters);
-    }
-    if (found) ray.tmax = hit.t;
-    return found;
+    if (!intersect_box(box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    return closest_hit_in_grid<Kernel, Counters, kMailbox>(
+        *scene_, tris_, ray, hit, t1, box, margin_, config_.cells.acceptance, extent_, counters,
+        [&](auto& state) { return traverse(0, ray, inv, t0, t1, state, counters); });
   }
 
   template <class Kernel, class Counters, bool kMailbox>
   bool any(const Ray& query, Counters& counters) const {
     const Ray ray = any_hit_ray<Kernel>(query);
     const Vec3f inv = safe_inverse(ray.dir);
+    const Bounds3f& box = levels_[0].geom.box;
     float t0, t1;
-    if (!intersect_box(levels_[0].geom.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(ray, t1, levels_[0].geom.box, margin_)) {
-      Hit hit;
-      return certified_over_all_primitives<true>(*scene_, ray, hit, counters);
-    }
-    AnyHitInCells<Kernel, Counters, kMailbox> state(*scene_, tris_, ray, counters);
-    return traverse(0, ray, inv, t0, t1, state, counters);
+    if (!intersect_box(box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, t1, box, margin_, counters,
+                                                       [&](auto& state) { return traverse(0, ray, inv, t0, t1, state, counters); });
   }
 
   std::shared_ptr<const Scene> scene_;
@@ -137,7 +129,7 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   double cell_budget_ = 0.0;   ///< see NestedGridConfig::cells_per_primitive_budget
   std::vector<Level> levels_;  ///< levels_[0] is the top grid
   std::vector<Cell> cells_;
-  std::vector<std::uint32_t> refs_;  ///< local ids of tris_ (primitive ids when tris_ is empty)
+  BuildArray<std::uint32_t> refs_;  ///< local ids of tris_ (primitive ids when tris_ is empty)
   CellTriangles tris_;
 };
 
