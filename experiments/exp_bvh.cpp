@@ -498,8 +498,8 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
 }
 
 // 4. Against Embree.
-/// Single-thread ns/ray of `accel`'s own loop and of Embree called directly on the rays, passes alternating, best of each over `passes`;
-/// returns Embree's time over ours (> 1: we are faster).
+/// Single-thread times of `accel`'s own loop and of Embree called directly on the rays, passes
+/// alternating, best of each over `passes`; returns Embree's time over ours (> 1: we are faster).
 double own_loop_over_direct(const Aggregate& accel, const DirectEmbree& embree, const std::vector<Ray>& rays, bool any,
                             int passes) {
   const FloatModeScope ftz(true);
@@ -568,7 +568,9 @@ std::string against_embree(Runner& run, const Options& opt) {
       "the robust default against Embree's fast mode. Every ratio goes through raylab's tracer on both sides, "
       "except *direct*: the structure's own loop (Aggregate::intersect/occluded in a plain loop) against Embree "
       "called directly (rtcIntersect1/rtcOccluded1 in a tight loop on the like-for-like Embree's own RTCScene), "
-      "single thread.\n\n| scene | rays | threads |";
+      "single thread. Our passes and both Embrees' alternate per row, best of each kept; 1-thread times are the "
+      "thread's CPU time, 2-thread times wall-clock (on a shared 2-core machine the 2-thread ratios are the noisier).\n\n"
+      "| scene | rays | threads |";
   for (const auto& c : columns) speed += " " + c.label + " |";
   speed += " `bvh` direct | `bvh:robust=off` direct | Embree Mrays/s |\n|---|---|---|";
   for (std::size_t i = 0; i < columns.size() + 3; ++i) speed += "---|";
