@@ -26,7 +26,7 @@ def plot(out: pathlib.Path) -> None:
         ax2 = ax.twinx()
         ax2.bar(x + 0.2, 100 * t["hits_per_test"], width=0.4, color="tab:orange", label="hit rate %")
         ax.set_xticks(x)
-        ax.set_xticklabels(labels, fontsize=6)
+        ax.set_xticklabels(labels, fontsize=6, rotation=30, ha="right")
         ax.set_ylabel("ray/triangle tests per ray")
         ax2.set_ylabel("tests that hit (%)")
         ax.set_title("BVH vs kd-tree: tests and hit rate (pbrt: 4.75x tests, 4.1% vs 16%)", fontsize=9)
