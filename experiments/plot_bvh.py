@@ -26,7 +26,7 @@ def plot(out: pathlib.Path) -> None:
         ax2 = ax.twinx()
         ax2.bar(x + 0.2, 100 * t["hits_per_test"], width=0.4, color="tab:orange", label="hit rate %")
         ax.set_xticks(x)
-        ax.set_xticklabels(labels, fontsize=6)
+        ax.set_xticklabels(labels, fontsize=6, rotation=30, ha="right")
         ax.set_ylabel("ray/triangle tests per ray")
         ax2.set_ylabel("tests that hit (%)")
         ax.set_title("BVH vs kd-tree: tests and hit rate (pbrt: 4.75x tests, 4.1% vs 16%)", fontsize=9)
@@ -66,17 +66,49 @@ def plot(out: pathlib.Path) -> None:
         ax.set_title("where time goes as scenes grow (diffuse rays)", fontsize=9)
         ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.08), ncol=3)
 
-    p = df[(df["part"] == "speed") & (df["threads"] == 1)]
-    if len(p):
-        ax = axes[1][1]
-        p = p.assign(kind=p["ray_spec"].str.split(":").str[0])
-        pivot = p.pivot_table(index=["scene", "kind"], columns="accel", values="throughput_vs_embree")
-        pivot.plot.barh(ax=ax, fontsize=6)
-        ax.axvline(1.0, color="k", linewidth=1)
-        ax.set_xlabel("throughput relative to Embree (1 thread)")
-        ax.set_title("against Embree", fontsize=9)
-        ax.set_ylabel("scene, rays")
-        ax.legend(fontsize=7, loc="lower right", bbox_to_anchor=(1.0, 1.02), ncol=3)
+    axes[1][1].axis("off")  # throughput against Embree: its own figure, bvh_embree.png
     fig.tight_layout()
     fig.savefig(out / "bvh.png", dpi=110)
+    plt.close(fig)
+    plot_against_embree(df, out)
+
+
+def plot_against_embree(df: pd.DataFrame, out: pathlib.Path) -> None:
+    """Throughput over Embree per scene (rows) and ray kind x comparison (columns), single thread:
+    one annotated cell per ratio, so no label covers another."""
+    p = df[(df["part"] == "speed") & (df["threads"] == 1)]
+    if not len(p):
+        return
+    p = p.assign(kind=p["ray_spec"].str.split(":").str[0])
+    comparisons = [("bvh", "throughput_vs_embree_robust", "bvh / embree-robust"),
+                   ("bvh:robust=off", "throughput_vs_embree", "robust=off / embree"),
+                   ("bvh", "throughput_vs_embree", "bvh / embree"),
+                   ("bvh", "own_loop_vs_embree_direct", "bvh direct / embree-robust direct")]
+    scenes = list(dict.fromkeys(p["scene"]))
+    kinds = [k for k in ("primary", "diffuse", "shadow") if k in set(p["kind"])]
+    grid = np.full((len(scenes), len(kinds) * len(comparisons)), np.nan)
+    labels = []
+    for k, kind in enumerate(kinds):
+        for c, (accel, column, label) in enumerate(comparisons):
+            labels.append(f"{kind}: {label}")
+            for r, scene in enumerate(scenes):
+                row = p[(p["scene"] == scene) & (p["kind"] == kind) & (p["accel"] == accel)]
+                if len(row) and row[column].iloc[0] > 0:
+                    grid[r, k * len(comparisons) + c] = row[column].iloc[0]
+    fig, ax = plt.subplots(figsize=(1.0 + 0.75 * grid.shape[1], 1.8 + 0.5 * len(scenes)))
+    image = ax.imshow(grid, cmap="RdBu", vmin=0.5, vmax=1.5, aspect="auto")
+    for r in range(grid.shape[0]):
+        for c in range(grid.shape[1]):
+            if not np.isnan(grid[r, c]):
+                ax.text(c, r, f"{grid[r, c]:.2f}", ha="center", va="center", fontsize=7)
+    for k in range(1, len(kinds)):
+        ax.axvline(k * len(comparisons) - 0.5, color="k", linewidth=1.5)
+    ax.set_xticks(range(grid.shape[1]))
+    ax.set_xticklabels(labels, rotation=40, ha="right", fontsize=7)
+    ax.set_yticks(range(len(scenes)))
+    ax.set_yticklabels([s if len(s) <= 32 else s[:30] + "…" for s in scenes], fontsize=7)
+    ax.set_title("BVH throughput / Embree's, single thread (> 1: faster than Embree; blank: not measured)", fontsize=9)
+    fig.colorbar(image, ax=ax, fraction=0.03, pad=0.01)
+    fig.tight_layout()
+    fig.savefig(out / "bvh_embree.png", dpi=110)
     plt.close(fig)

@@ -63,7 +63,8 @@ TEST(FuzzRegressions, BuildAndTrace) {
 TEST(FuzzRegressions, SceneSpecSizeBoundHoldsForEveryKind) {
   const std::vector<std::string> specs = {
       "sphere", "sphere:n=8", "sphereflake", "sphereflake:depth=2,as=triangles,tess=5", "stadium",
-      "stadium:object=(grass:blades=7),segments=9,tiers=3", "grass", "walls", "soup", "dust", "dust:n=3,size=0.5",
+      "stadium:object=(grass:blades=7),segments=9,tiers=3", "grass", "walls", "room:of=(sphere:n=100),margin=2",
+      "soup", "dust", "dust:n=3,size=0.5",
       "needles", "needles:n=7", "fan", "fan:n=3", "row", "row:n=5,gap=0.01", "subdivided:of=(sphere:n=100),levels=2",
       "subdivided:levels=0", "instances", "instances:of=(walls:n=2),count=5", "transformed:of=(sphere:n=100),scale=2",
       "transformed:of=(instances:of=(walls:n=2),count=5),rotate=x:30,translate=1e5:0:0"};

@@ -100,6 +100,29 @@ TEST(SceneSpecs, Walls) {
   EXPECT_NEAR(r->bounds().lo.y, 0.0f, 1e-6f);
 }
 
+TEST(SceneSpecs, RoomEnclosesTheObjectAndMakesBouncesHit) {
+  const auto object = make_scene("sphere:n=200");
+  const auto s = make_scene("room:of=(sphere:n=200),margin=1,window=0.8");
+  EXPECT_EQ(s->triangle_count(), object->triangle_count() + 3 * (2 + 8));
+  const Bounds3f ob = object->bounds(), rb = s->bounds();
+  const float grow = ob.hi.x - ob.lo.x;  // margin 1 times the largest extent (the sphere's diameter)
+  EXPECT_NEAR(rb.lo.x, ob.lo.x - grow, 1e-5f);
+  EXPECT_NEAR(rb.hi.z, ob.hi.z + grow, 1e-5f);
+  // The camera sees the object through the windows; bounces from what it sees (frames' outsides
+  // included) hit a wall or the object far more often than the bare object's do.
+  const auto embree = make_accelerator("embree-robust", s);
+  const auto primary = make_ray_set("primary:4096", s);
+  const TraceResult seen = trace_rays(*embree, primary, TraceOptions{1, false, false});
+  EXPECT_TRUE(std::any_of(seen.hits.begin(), seen.hits.end(),
+                          [&](const Hit& h) { return h.prim < object->triangle_count(); }));
+  const auto diffuse = make_ray_set("diffuse:4096", s);
+  const TraceResult bounced = trace_rays(*embree, diffuse, TraceOptions{1, false, false});
+  EXPECT_GT(bounced.hit_count, diffuse.size() * 3 / 10);
+  // The same diffuse rays hit far less often with the room taken away.
+  const auto alone = make_accelerator("embree-robust", object);
+  EXPECT_LT(2 * trace_rays(*alone, diffuse, TraceOptions{1, false, false}).hit_count, bounced.hit_count);
+}
+
 TEST(SceneSpecs, SoupIsDeterministic) {
   const auto a = make_scene("soup:n=1000");
   const auto b = make_scene("soup:n=1000,seed=1");
@@ -180,7 +203,9 @@ TEST(SceneSpecs, ErrorsAreInputErrors) {
                            "sphereflake:depth=8", "sphereflake:as=cubes", "stadium:object=(sphere:n=100", "grass:blades=0",
                            "walls:angle=nan", "soup:n=-1", "cgal:no_such_mesh", "cgal", "cgal:a,b", "cgal:bunny00,x=1",
                            "file:/no/such/file.off", "/no/such/file.ply", "instances:of=(sphere:n=100),count=0",
-                           "stadium:object=(sphere:n=100),ratio=0", "sphere:5"}) {
+                           "stadium:object=(sphere:n=100),ratio=0", "sphere:5", "room:margin=0",
+                           "room:of=(sphere:n=100),margin=nan", "room:window=1",
+                           "room:of=(instances:of=(sphere:n=100),count=2)"}) {
     SCOPED_TRACE(spec);
     EXPECT_THROW(make_scene(spec), InputError);
   }
@@ -205,8 +230,8 @@ TEST(SceneSpecs, UnknownKindListsTheValidOnes) {
 
 TEST(SceneSpecs, KindsAreDocumented) {
   const auto& kinds = scene_kinds();
-  for (const char* name : {"cgal", "file", "sphere", "sphereflake", "stadium", "grass", "walls", "soup", "dust", "needles",
-                           "fan", "row", "subdivided", "decimated", "instances"}) {
+  for (const char* name : {"cgal", "file", "sphere", "sphereflake", "stadium", "grass", "walls", "room", "soup", "dust",
+                           "needles", "fan", "row", "subdivided", "decimated", "instances"}) {
     const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const SceneKindDoc& k) { return k.name == name; });
     ASSERT_NE(it, kinds.end()) << name;
     EXPECT_FALSE(it->summary.empty());

@@ -252,6 +252,51 @@ Scene make_walls(const WallsConfig& c) {
   return s;
 }
 
+Scene make_room(const Scene& object, const RoomConfig& c) {
+  require(!object.instanced(), "room: the object " + object.spec + " must not be instanced");
+  require(std::isfinite(c.margin) && c.margin >= 0.01 && c.margin <= 100, "room: margin must be in [0.01, 100]");
+  require(std::isfinite(c.window) && c.window >= 0.05 && c.window <= 0.95, "room: window must be in [0.05, 0.95]");
+  const Bounds3f ob = object.bounds();
+  require(!ob.empty(), "room: the object " + object.spec + " is empty");
+  const Vec3d extent(ob.diagonal());
+  const double grow = c.margin * std::max({extent.x, extent.y, extent.z});
+  require(grow > 0, "room: the object " + object.spec + " has a zero-size bounding box");
+  check_triangle_budget("room", static_cast<double>(object.mesh.size()) + 36.0);
+  const Vec3d lo = Vec3d(ob.lo) - Vec3d(grow), hi = Vec3d(ob.hi) + Vec3d(grow);
+  Scene s;
+  s.mesh = object.mesh;
+  s.spheres = object.spheres;
+  TriangleMesh& m = s.mesh;
+  // Face `axis` at `side` (0: lo, 1: hi), spanned by the other two axes u, v; a windowed face is
+  // the frame around the central square of half its side (4 quads), a solid face one quad.
+  auto point = [&](int axis, int side, double fu, double fv) {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    Vec3d p;
+    p[axis] = side ? hi[axis] : lo[axis];
+    p[u] = lo[u] + fu * (hi[u] - lo[u]);
+    p[v] = lo[v] + fv * (hi[v] - lo[v]);
+    return Vec3f(p);
+  };
+  auto quad = [&](int axis, int side, double u0, double v0, double u1, double v1) {
+    const auto base = u32(m.vertices.size());
+    m.vertices.push_back(point(axis, side, u0, v0));
+    m.vertices.push_back(point(axis, side, u1, v0));
+    m.vertices.push_back(point(axis, side, u1, v1));
+    m.vertices.push_back(point(axis, side, u0, v1));
+    m.triangles.push_back({base, base + 1, base + 2});
+    m.triangles.push_back({base, base + 2, base + 3});
+  };
+  const double a = 0.5 * (1.0 - c.window), b = 1.0 - a;
+  for (int axis = 0; axis < 3; ++axis) {
+    quad(axis, 0, 0, 0, 1, 1);
+    quad(axis, 1, 0, 0, a, 1);  // the window frame: left and right columns,
+    quad(axis, 1, b, 0, 1, 1);
+    quad(axis, 1, a, 0, b, a);  // bottom and top between them
+    quad(axis, 1, a, b, b, 1);
+  }
+  return s;
+}
+
 Scene make_soup(const SoupConfig& c) {
   require(c.triangles >= 1 && c.triangles <= kMaxTriangles, "soup: n must be in [1, 2^27]");
   require(std::isfinite(c.size) && c.size >= 0 && c.size <= 1, "soup: size must be in [0, 1]");

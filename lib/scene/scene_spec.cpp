@@ -147,6 +147,13 @@ std::shared_ptr<Scene> build(const std::string& text) {
     c.spacing = r.get_double("spacing", c.spacing, 1e-9, 1e6);
     r.finish(params);
     *scene = make_walls(c);
+  } else if (name == "room") {
+    RoomConfig c;
+    const std::string object = r.get_string("of", "cgal:bunny00");
+    c.margin = r.get_double("margin", c.margin, 0.01, 100);
+    c.window = r.get_double("window", c.window, 0.05, 0.95);
+    r.finish(params);
+    *scene = make_room(*make_scene(object), c);
   } else if (name == "soup") {
     SoupConfig c;
     c.triangles = r.get_int("n", c.triangles, 1, std::int64_t{1} << 27);
@@ -293,6 +300,10 @@ const std::vector<SceneKindDoc>& scene_kinds() {
         {"length", "10", "wall length"},
         {"thickness", "0.05", "wall thickness"},
         {"spacing", "0.5", "distance between rows"}}},
+      {"room", "an object inside a closed box room, windows in the three faces toward the default camera",
+       {{"of", "cgal:bunny00", "the object's scene spec (parenthesise nested specs)"},
+        {"margin", "0.25", "room grows the object's box by margin x its largest extent per side, in [0.01, 100]"},
+        {"window", "0.8", "side of each window over its face's side, in [0.05, 0.95]"}}},
       {"soup", "independent random triangles in the unit cube",
        {{"n", "10000", "number of triangles, in [1, 2^27]"},
         {"size", "0", "triangle size; 0 = n^(-1/3)"},

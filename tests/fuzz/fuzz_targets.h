@@ -165,6 +165,7 @@ inline double spec_size_bound(const std::string& text) {
     return nested("object") + 12 * spec_number(spec, "segments") * (1 + 4 * spec_number(spec, "tiers"));
   if (kind == "grass") return 3 * spec_number(spec, "blades");
   if (kind == "walls") return 12 * spec_number(spec, "n");
+  if (kind == "room") return nested("of") + 36;
   if (kind == "soup" || kind == "dust" || kind == "needles" || kind == "fan" || kind == "row") return spec_number(spec, "n");
   if (kind == "subdivided") return nested("of") * std::pow(4.0, std::min(spec_number(spec, "levels"), 64.0));
   if (kind == "instances") return nested("of") + spec_number(spec, "count");

@@ -26,7 +26,8 @@ struct BvhConfig {
   /// Children per node of the traversed tree: 2 (BVH2, the lecture's stack traversal) or a wide
   /// tree collapsed from the binary one, 4 or 8 (SIMD box tests).
   int width = 2;
-  /// The builder makes a leaf of at most this many primitives (SAH may stop earlier).
+  /// The builder makes a leaf of at most this many primitives (SAH may stop earlier); the spec
+  /// default is 4 at width 2 and 8 (two triangle packets) at width 4 or 8.
   int max_leaf_size = 4;
   /// The most SAH bins per axis (binned and spatial builders): small nodes use fewer (4 + n/20,
   /// as Embree), and spatial splits use half as many.

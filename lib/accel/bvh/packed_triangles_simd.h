@@ -189,22 +189,29 @@ struct PacketKernel<MollerTrumboreKernel> {
       out[2] = fmsub(x[0], y[1], x[1] * y[0]);
     };
     const auto dot = [](const F* x, const F* y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+    // The division is deferred until a lane is known to hit (as Embree's Triangle4 test): the
+    // barycentric and distance tests compare unnormalised U, V, T with sign(det) folded in,
+    // against |det|, |det|·tmin and |det|·tmax.
     F pv[3], tv[3], qv[3];
     cross(r.d, e2, pv);
     const F det = dot(e1, pv);
-    const F zero = F::broadcast(0.0f), one = F::broadcast(1.0f);
+    const F zero = F::broadcast(0.0f);
     unsigned ok = ~(det == zero) & finite(det) & ((1u << kPacketWidth) - 1);
     if (ok == 0) return -1;
-    const F inv_det = one / det;
+    const F sign = sign_bits(det), abs_det = abs(det);
     for (int a = 0; a < 3; ++a) tv[a] = r.o[a] - p0[a];
-    const F u = dot(tv, pv) * inv_det;
-    ok &= (u >= zero) & (u <= one);
-    if (ok == 0) return -1;
+    const F U = dot(tv, pv) ^ sign;
     cross(tv, e1, qv);
-    const F v = dot(r.d, qv) * inv_det;
-    ok &= (v >= zero) & (u + v <= one);
+    const F V = dot(r.d, qv) ^ sign;
+    ok &= (U >= zero) & (V >= zero) & (U + V <= abs_det);
     if (ok == 0) return -1;
-    const F t = dot(e2, qv) * inv_det;
+    const F T = dot(e2, qv) ^ sign;
+    ok &= (T >= abs_det * F::broadcast(c.ray.tmin)) & (T < abs_det * F::broadcast(c.tmax));
+    if (ok == 0) return -1;
+    const F inv_det = F::broadcast(1.0f) / abs_det;
+    const F t = T * inv_det, u = U * inv_det, v = V * inv_det;
+    // The product |det|·tmax may round up past T·(1/|det|)'s own rounding: the hit stays strictly
+    // before the current closest, and on [tmin, ...).
     ok &= (t >= F::broadcast(c.ray.tmin)) & (t < F::broadcast(c.tmax));
     if (ok == 0) return -1;
     alignas(16) float ts[kPacketWidth], us[kPacketWidth], vs[kPacketWidth];

@@ -35,6 +35,9 @@ struct Float<4> {
 #endif
   }
   friend Float abs(Float a) { return {_mm_andnot_ps(_mm_set1_ps(-0.0f), a.v)}; }
+  /// The sign bits of a (every other bit 0); x ^ sign_bits(a) is x with its sign flipped where a's is set.
+  friend Float sign_bits(Float a) { return {_mm_and_ps(a.v, _mm_set1_ps(-0.0f))}; }
+  friend Float operator^(Float a, Float b) { return {_mm_xor_ps(a.v, b.v)}; }
   /// Lane masks as bits (bit i = lane i).
   friend unsigned operator<=(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(a.v, b.v))); }
   friend unsigned operator<(Float a, Float b) { return static_cast<unsigned>(_mm_movemask_ps(_mm_cmplt_ps(a.v, b.v))); }

@@ -4,6 +4,8 @@
 /// then the hit children in near-first order: the nearest is visited next, the others are pushed
 /// far-to-near with their entry distances and skipped on pop once the closest hit lies before
 /// them. Any-hit traversal pushes hit children unordered and stops at the first hit.
+#include <immintrin.h>
+
 #include <bit>
 #include <cstdint>
 
@@ -11,6 +13,14 @@
 #include "accel/bvh/wide_bvh.h"
 
 namespace raylab {
+
+/// Prefetches the cache lines of the interior node `ref` (leaves are left to the leaf test).
+template <int N>
+[[gnu::always_inline]] inline void prefetch_node(const WideBvhNode<N>* nodes, std::uint32_t ref) {
+  if (WideRef::is_leaf(ref)) return;
+  const char* p = reinterpret_cast<const char*>(nodes + ref);
+  for (std::size_t line = 0; line < sizeof(WideBvhNode<N>); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+}
 
 /// Traverses `nodes` (root 0). `closest` is the current closest-hit distance, which
 /// `leaf(first_packet, packet_count, closest)` lowers when it finds a hit and reports by
@@ -36,6 +46,9 @@ bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& close
       const WideBvhNode<N>& node = nodes[ref];
       counters.node();
       unsigned mask = r.hit(node, closest, entry);
+      // Incoherent rays miss the caches on most node loads: start every hit child's lines now,
+      // so those of the children taken later arrive while the nearest one is traversed.
+      for (unsigned m = mask; m != 0; m &= m - 1) prefetch_node(nodes, node.child[std::countr_zero(m)]);
       if (mask != 0) {
         const int i = std::countr_zero(mask);
         mask &= mask - 1;

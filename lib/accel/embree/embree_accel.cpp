@@ -133,6 +133,7 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
   AccelStats stats() const override { return {bytes_, 0, -1.0}; }
   bool reports_counters() const override { return false; }
   Bounds3f bounds() const override { return bounds_; }
+  RTCScene rtc_scene() const { return root_; }
 
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters&) const {
@@ -204,6 +205,11 @@ class EmbreeAccel final : public AggregateBase<EmbreeAccel> {
 
 std::unique_ptr<Aggregate> make_embree_accel(std::shared_ptr<const Scene> scene, const EmbreeConfig& config) {
   return std::make_unique<EmbreeAccel>(std::move(scene), config);
+}
+
+RTCScene embree_rtc_scene(const Aggregate& accel) {
+  const auto* e = dynamic_cast<const EmbreeAccel*>(&accel);
+  return e ? e->rtc_scene() : nullptr;
 }
 
 }  // namespace raylab

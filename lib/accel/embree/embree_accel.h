@@ -10,6 +10,8 @@
 /// apart from tracing: construction of this object is the build.
 ///
 /// Embree reports no traversal counters; raylab's counters stay 0 for it.
+#include <embree3/rtcore.h>
+
 #include <memory>
 #include <string>
 
@@ -25,5 +27,10 @@ struct EmbreeConfig {
 };
 
 std::unique_ptr<Aggregate> make_embree_accel(std::shared_ptr<const Scene> scene, const EmbreeConfig& config);
+
+/// The committed root scene of an `embree` / `embree-robust` accelerator, for callers that trace
+/// it with rtcIntersect1 / rtcOccluded1 themselves (Embree without raylab's call path); null for
+/// any other aggregate. Valid while `accel` lives.
+RTCScene embree_rtc_scene(const Aggregate& accel);
 
 }  // namespace raylab
