@@ -111,6 +111,72 @@ Bounds3f ConvexCell::bounds() const {
   return b;
 }
 
+bool ConvexCell::estimate_split(const BspPlane& plane, SplitEstimate& e) const {
+  // Each part's faces are the parts of this cell's faces on its side (their area vectors summed
+  // as they are walked: Newell's formula, relative to the face's first vertex) and the cap, the
+  // cell's section by the plane. The part is closed, so its outward face area vectors sum to
+  // zero: the cap's area is the length of the sum of its other faces' outward area vectors.
+  Vec3d centre(0.0);
+  std::size_t vertices = 0;
+  for (const auto& f : faces_)
+    for (const Vec3d& v : f) centre += v, ++vertices;
+  if (vertices == 0) return false;
+  centre = centre / static_cast<double>(vertices);
+  Bounds3d neg_box, pos_box;
+  bool any_neg = false, any_pos = false;
+  Vec3d pos_outward(0.0);
+  e.negative_area = e.positive_area = 0.0;
+  for (const auto& f : faces_) {
+    const Vec3d base = f[0];
+    Vec3d whole(0.0), neg(0.0), pos(0.0);
+    Vec3d neg_first, neg_prev, pos_first, pos_prev;
+    bool neg_started = false, pos_started = false;
+    auto emit = [](const Vec3d& q, Vec3d& first, Vec3d& prev, bool& started, Vec3d& sum) {
+      if (started) sum += cross(prev, q);
+      else first = q, started = true;
+      prev = q;
+    };
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      const Vec3d& a = f[i];
+      const Vec3d& b = f[(i + 1) % f.size()];
+      whole += cross(a - base, b - base);
+      const double da = plane.signed_distance(a), db = plane.signed_distance(b);
+      if (da <= 0.0) emit(a - base, neg_first, neg_prev, neg_started, neg), neg_box.extend(a);
+      if (da >= 0.0) emit(a - base, pos_first, pos_prev, pos_started, pos), pos_box.extend(a);
+      any_neg = any_neg || da < 0.0;
+      any_pos = any_pos || da > 0.0;
+      if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) {
+        const Vec3d p = a + (b - a) * (da / (da - db));
+        emit(p - base, neg_first, neg_prev, neg_started, neg);
+        emit(p - base, pos_first, pos_prev, pos_started, pos);
+        neg_box.extend(p);
+        pos_box.extend(p);
+      }
+    }
+    if (neg_started) neg += cross(neg_prev, neg_first);
+    if (pos_started) pos += cross(pos_prev, pos_first);
+    const double outward = dot(whole, base - centre) >= 0.0 ? 1.0 : -1.0;
+    pos_outward += pos * outward;
+    e.negative_area += 0.5 * length(neg);
+    e.positive_area += 0.5 * length(pos);
+  }
+  if (!any_neg || !any_pos) return false;
+  const double cap = 0.5 * length(pos_outward);
+  e.negative_area += cap;
+  e.positive_area += cap;
+  auto to_float = [](const Bounds3d& b) {
+    Bounds3f out;
+    for (int k = 0; k < 3; ++k) {
+      out.lo[k] = std::nextafter(static_cast<float>(b.lo[k]), -std::numeric_limits<float>::infinity());
+      out.hi[k] = std::nextafter(static_cast<float>(b.hi[k]), std::numeric_limits<float>::infinity());
+    }
+    return out;
+  };
+  e.negative_box = to_float(neg_box);
+  e.positive_box = to_float(pos_box);
+  return true;
+}
+
 void ConvexCell::split(const BspPlane& plane, ConvexCell& negative, ConvexCell& positive) const {
   negative.faces_.clear();
   positive.faces_.clear();
