@@ -216,7 +216,7 @@ class BspBuilder {
                  {best.origin.x, best.origin.y, best.origin.z},
                  best.scale,
                  0,
-                 BspNode::kInterior};
+                 best.axis >= 0 ? BspNode::kAxisInterior + static_cast<std::uint32_t>(best.axis) : BspNode::kInterior};
     out_.nodes.push_back(node);
     build(left, best_neg, depth + 1);
     out_.nodes[index].index = static_cast<std::uint32_t>(out_.nodes.size());
