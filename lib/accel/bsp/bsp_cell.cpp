@@ -15,6 +15,21 @@ ConvexCell::ConvexCell(const Bounds3f& box) {
   auto corner = [&](int i) { return Vec3d(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z); };
   const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   for (const auto& q : quads) faces_.push_back({corner(q[0]), corner(q[1]), corner(q[2]), corner(q[3])});
+  orient_faces();
+}
+
+void ConvexCell::orient_faces() {
+  Vec3d centre(0.0);
+  std::size_t vertices = 0;
+  for (const auto& f : faces_)
+    for (const Vec3d& v : f) centre += v, ++vertices;
+  if (vertices > 0) centre = centre / static_cast<double>(vertices);
+  outward_.clear();
+  for (const auto& f : faces_) {
+    Vec3d area(0.0);
+    for (std::size_t i = 0; i < f.size(); ++i) area += cross(f[i] - f[0], f[(i + 1) % f.size()] - f[0]);
+    outward_.push_back(dot(area, f[0] - centre) >= 0.0 ? 1.0 : -1.0);
+  }
 }
 
 namespace {
@@ -116,19 +131,15 @@ bool ConvexCell::estimate_split(const BspPlane& plane, SplitEstimate& e) const {
   // as they are walked: Newell's formula, relative to the face's first vertex) and the cap, the
   // cell's section by the plane. The part is closed, so its outward face area vectors sum to
   // zero: the cap's area is the length of the sum of its other faces' outward area vectors.
-  Vec3d centre(0.0);
-  std::size_t vertices = 0;
-  for (const auto& f : faces_)
-    for (const Vec3d& v : f) centre += v, ++vertices;
-  if (vertices == 0) return false;
-  centre = centre / static_cast<double>(vertices);
+  if (faces_.empty()) return false;
   Bounds3d neg_box, pos_box;
   bool any_neg = false, any_pos = false;
   Vec3d pos_outward(0.0);
   e.negative_area = e.positive_area = 0.0;
-  for (const auto& f : faces_) {
+  for (std::size_t face = 0; face < faces_.size(); ++face) {
+    const auto& f = faces_[face];
     const Vec3d base = f[0];
-    Vec3d whole(0.0), neg(0.0), pos(0.0);
+    Vec3d neg(0.0), pos(0.0);
     Vec3d neg_first, neg_prev, pos_first, pos_prev;
     bool neg_started = false, pos_started = false;
     auto emit = [](const Vec3d& q, Vec3d& first, Vec3d& prev, bool& started, Vec3d& sum) {
@@ -139,7 +150,6 @@ bool ConvexCell::estimate_split(const BspPlane& plane, SplitEstimate& e) const {
     for (std::size_t i = 0; i < f.size(); ++i) {
       const Vec3d& a = f[i];
       const Vec3d& b = f[(i + 1) % f.size()];
-      whole += cross(a - base, b - base);
       const double da = plane.signed_distance(a), db = plane.signed_distance(b);
       if (da <= 0.0) emit(a - base, neg_first, neg_prev, neg_started, neg), neg_box.extend(a);
       if (da >= 0.0) emit(a - base, pos_first, pos_prev, pos_started, pos), pos_box.extend(a);
@@ -155,8 +165,7 @@ bool ConvexCell::estimate_split(const BspPlane& plane, SplitEstimate& e) const {
     }
     if (neg_started) neg += cross(neg_prev, neg_first);
     if (pos_started) pos += cross(pos_prev, pos_first);
-    const double outward = dot(whole, base - centre) >= 0.0 ? 1.0 : -1.0;
-    pos_outward += pos * outward;
+    pos_outward += pos * outward_[face];
     e.negative_area += 0.5 * length(neg);
     e.positive_area += 0.5 * length(pos);
   }
@@ -239,6 +248,8 @@ void ConvexCell::split(const BspPlane& plane, ConvexCell& negative, ConvexCell& 
     negative.faces_.push_back(poly);
     positive.faces_.push_back(std::move(poly));
   }
+  negative.orient_faces();
+  positive.orient_faces();
 }
 
 }  // namespace raylab

@@ -37,6 +37,10 @@ class ConvexCell {
   /// The faces as computed in double: each vertex within error_ (per coordinate) of the exact
   /// cell's corresponding vertex.
   std::vector<std::vector<Vec3d>> faces_;
+  /// Per face, +1 when its vertex order turns about the outward normal (Newell's area vector
+  /// points out of the cell), else -1: set by orient_faces() whenever faces_ is.
+  std::vector<double> outward_;
+  void orient_faces();
   /// A box containing the exact cell: the parent's box cut to the points that may lie on this
   /// side, widened by error_ (first-order forward error analysis of the clipping).
   Bounds3d box_;
