@@ -147,10 +147,14 @@ bool ConvexCell::estimate_split(const BspPlane& plane, SplitEstimate& e) const {
       else first = q, started = true;
       prev = q;
     };
-    for (std::size_t i = 0; i < f.size(); ++i) {
+    const std::size_t m = f.size();
+    const double d_first = plane.signed_distance(f[0]);
+    double db = d_first;
+    for (std::size_t i = 0; i < m; ++i) {
       const Vec3d& a = f[i];
-      const Vec3d& b = f[(i + 1) % f.size()];
-      const double da = plane.signed_distance(a), db = plane.signed_distance(b);
+      const Vec3d& b = i + 1 < m ? f[i + 1] : f[0];
+      const double da = db;  // each vertex's distance computed once, as the end of one edge and the start of the next
+      db = i + 1 < m ? plane.signed_distance(b) : d_first;
       if (da <= 0.0) emit(a - base, neg_first, neg_prev, neg_started, neg), neg_box.extend(a);
       if (da >= 0.0) emit(a - base, pos_first, pos_prev, pos_started, pos), pos_box.extend(a);
       any_neg = any_neg || da < 0.0;

@@ -12,7 +12,7 @@ namespace raylab {
 
 struct OctNode {
   /// `count` at or above this marks an interior node, its low 8 bits the mask of stored children;
-  /// a leaf's count stays below it (at most the scene's primitive count, below 2^28).
+  /// a leaf's count stays below it (a leaf lists distinct 32-bit primitive ids, none of them kInvalidId).
   static constexpr std::uint32_t kInterior = 0xffffff00u;
   std::uint32_t first = 0;          ///< first stored child, or offset into the primitive index array
   std::uint32_t count = kInterior;  ///< leaf primitive count, or kInterior | mask of stored children
