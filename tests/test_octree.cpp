@@ -88,15 +88,17 @@ TEST(Octree, RevellesVisitsLeavesFrontToBackAndMissesNone) {
   const auto scene = make_scene("soup:n=1500");
   const Octree tree(scene, octree_config(""));
   const Bounds3f root = tree.data().bounds;
-  std::vector<std::pair<Bounds3f, std::uint32_t>> leaves;  // box, node index
+  std::vector<std::pair<Bounds3f, std::uint32_t>> leaves;  // box, node index: the stored (non-empty) leaves
   {
     std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0, root}};
     while (!todo.empty()) {
       const auto [n, box] = todo.back();
       todo.pop_back();
-      if (tree.data().nodes[n].is_leaf()) leaves.push_back({box, n});
+      const OctNode& node = tree.data().nodes[n];
+      if (node.is_leaf()) leaves.push_back({box, n});
       else
-        for (unsigned i = 0; i < 8; ++i) todo.push_back({tree.data().nodes[n].first + i, octree_child_box(box, i)});
+        for (unsigned i = 0; i < 8; ++i)
+          if (node.has_child(i)) todo.push_back({node.child(i), octree_child_box(box, i)});
     }
   }
   ASSERT_GT(leaves.size(), 64u);
@@ -174,8 +176,10 @@ TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
         const Vec3f d((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, (k & 4) ? 1.0f : -1.0f);
         rays.push_back({c - d * 2.0f * length(probe.data().bounds.diagonal()), d});
       }
-      if (!probe.data().nodes[n].is_leaf())
-        for (unsigned i = 0; i < 8; ++i) todo.push_back({probe.data().nodes[n].first + i, octree_child_box(box, i)});
+      const OctNode& node = probe.data().nodes[n];
+      if (!node.is_leaf())
+        for (unsigned i = 0; i < 8; ++i)
+          if (node.has_child(i)) todo.push_back({node.child(i), octree_child_box(box, i)});
     }
     const auto oracle = make_accelerator("exact", scene);
     const double diag = length(Vec3d(scene->bounds().diagonal()));

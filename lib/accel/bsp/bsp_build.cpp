@@ -156,7 +156,7 @@ class BspBuilder {
     }
     double best_cost = std::numeric_limits<double>::infinity();
     BspPlane best;
-    ConvexCell best_neg, best_pos, neg, pos;
+    ConvexCell::SplitEstimate est;
     // Large nodes rank candidates on an evenly spaced sample of their primitives, counts scaled
     // up: the ranking needs estimates, the placement below is exact.
     const std::vector<std::uint32_t>* sample = &refs;
@@ -166,30 +166,30 @@ class BspBuilder {
       sample = &sampled;
     }
     const double scale = static_cast<double>(n) / static_cast<double>(sample->size());
-    // Keeps the split of `cell` by `p` when it costs less; the counts are a function of its cells.
+    // Keeps `p` when its split of `cell` costs less, ranked on estimated parts (estimate_split:
+    // no part is built); the counts are a function of the estimate.
     auto consider = [&](const BspPlane& p, auto&& side_counts) {
-      cell.split(p, neg, pos);
-      if (neg.empty() || pos.empty()) return;
+      if (!cell.estimate_split(p, est)) return;
       const auto [n_neg, n_pos] = side_counts();
-      const double c = config_.cost.split(sa, neg.surface_area(), pos.surface_area(), n_neg, n_pos);
+      const double c = config_.cost.split(sa, est.negative_area, est.positive_area, n_neg, n_pos);
       if (c < best_cost) {
         best_cost = c;
         best = p;
-        std::swap(best_neg, neg);
-        std::swap(best_pos, pos);
       }
     };
     for (const BspPlane& p : candidates(refs))
       consider(p, [&] {
         std::size_t s_neg, s_pos;
-        count(*sample, p, neg.bounds(), pos.bounds(), s_neg, s_pos);
+        count(*sample, p, est.negative_box, est.positive_box, s_neg, s_pos);
         return std::pair{static_cast<std::size_t>(std::llround(static_cast<double>(s_neg) * scale)),
                          static_cast<std::size_t>(std::llround(static_cast<double>(s_pos) * scale))};
       });
     // No primitive reaches a cut's empty side: its counts are known, not estimated.
     for (const EmptySpaceCut& cut : empty_space_cuts(refs, cell.bounds()))
       consider(cut.plane, [&] { return cut.negative_empty ? std::pair{std::size_t{0}, n} : std::pair{n, std::size_t{0}}; });
-    if (!(best_cost < config_.cost.leaf(n))) {
+    ConvexCell best_neg, best_pos;
+    if (best_cost < config_.cost.leaf(n)) cell.split(best, best_neg, best_pos);
+    if (!(best_cost < config_.cost.leaf(n)) || best_neg.empty() || best_pos.empty()) {
       make_leaf(refs, sa, depth);
       return;
     }
@@ -216,7 +216,7 @@ class BspBuilder {
                  {best.origin.x, best.origin.y, best.origin.z},
                  best.scale,
                  0,
-                 BspNode::kInterior};
+                 best.axis >= 0 ? BspNode::kAxisInterior + static_cast<std::uint32_t>(best.axis) : BspNode::kInterior};
     out_.nodes.push_back(node);
     build(left, best_neg, depth + 1);
     out_.nodes[index].index = static_cast<std::uint32_t>(out_.nodes.size());

@@ -15,6 +15,21 @@ ConvexCell::ConvexCell(const Bounds3f& box) {
   auto corner = [&](int i) { return Vec3d(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z); };
   const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
   for (const auto& q : quads) faces_.push_back({corner(q[0]), corner(q[1]), corner(q[2]), corner(q[3])});
+  orient_faces();
+}
+
+void ConvexCell::orient_faces() {
+  Vec3d centre(0.0);
+  std::size_t vertices = 0;
+  for (const auto& f : faces_)
+    for (const Vec3d& v : f) centre += v, ++vertices;
+  if (vertices > 0) centre = centre / static_cast<double>(vertices);
+  outward_.clear();
+  for (const auto& f : faces_) {
+    Vec3d area(0.0);
+    for (std::size_t i = 0; i < f.size(); ++i) area += cross(f[i] - f[0], f[(i + 1) % f.size()] - f[0]);
+    outward_.push_back(dot(area, f[0] - centre) >= 0.0 ? 1.0 : -1.0);
+  }
 }
 
 namespace {
@@ -111,6 +126,70 @@ Bounds3f ConvexCell::bounds() const {
   return b;
 }
 
+bool ConvexCell::estimate_split(const BspPlane& plane, SplitEstimate& e) const {
+  // Each part's faces are the parts of this cell's faces on its side (their area vectors summed
+  // as they are walked: Newell's formula, relative to the face's first vertex) and the cap, the
+  // cell's section by the plane. The part is closed, so its outward face area vectors sum to
+  // zero: the cap's area is the length of the sum of its other faces' outward area vectors.
+  if (faces_.empty()) return false;
+  Bounds3d neg_box, pos_box;
+  bool any_neg = false, any_pos = false;
+  Vec3d pos_outward(0.0);
+  e.negative_area = e.positive_area = 0.0;
+  for (std::size_t face = 0; face < faces_.size(); ++face) {
+    const auto& f = faces_[face];
+    const Vec3d base = f[0];
+    Vec3d neg(0.0), pos(0.0);
+    Vec3d neg_first, neg_prev, pos_first, pos_prev;
+    bool neg_started = false, pos_started = false;
+    auto emit = [](const Vec3d& q, Vec3d& first, Vec3d& prev, bool& started, Vec3d& sum) {
+      if (started) sum += cross(prev, q);
+      else first = q, started = true;
+      prev = q;
+    };
+    const std::size_t m = f.size();
+    const double d_first = plane.signed_distance(f[0]);
+    double db = d_first;
+    for (std::size_t i = 0; i < m; ++i) {
+      const Vec3d& a = f[i];
+      const Vec3d& b = i + 1 < m ? f[i + 1] : f[0];
+      const double da = db;  // each vertex's distance computed once, as the end of one edge and the start of the next
+      db = i + 1 < m ? plane.signed_distance(b) : d_first;
+      if (da <= 0.0) emit(a - base, neg_first, neg_prev, neg_started, neg), neg_box.extend(a);
+      if (da >= 0.0) emit(a - base, pos_first, pos_prev, pos_started, pos), pos_box.extend(a);
+      any_neg = any_neg || da < 0.0;
+      any_pos = any_pos || da > 0.0;
+      if ((da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0)) {
+        const Vec3d p = a + (b - a) * (da / (da - db));
+        emit(p - base, neg_first, neg_prev, neg_started, neg);
+        emit(p - base, pos_first, pos_prev, pos_started, pos);
+        neg_box.extend(p);
+        pos_box.extend(p);
+      }
+    }
+    if (neg_started) neg += cross(neg_prev, neg_first);
+    if (pos_started) pos += cross(pos_prev, pos_first);
+    pos_outward += pos * outward_[face];
+    e.negative_area += 0.5 * length(neg);
+    e.positive_area += 0.5 * length(pos);
+  }
+  if (!any_neg || !any_pos) return false;
+  const double cap = 0.5 * length(pos_outward);
+  e.negative_area += cap;
+  e.positive_area += cap;
+  auto to_float = [](const Bounds3d& b) {
+    Bounds3f out;
+    for (int k = 0; k < 3; ++k) {
+      out.lo[k] = std::nextafter(static_cast<float>(b.lo[k]), -std::numeric_limits<float>::infinity());
+      out.hi[k] = std::nextafter(static_cast<float>(b.hi[k]), std::numeric_limits<float>::infinity());
+    }
+    return out;
+  };
+  e.negative_box = to_float(neg_box);
+  e.positive_box = to_float(pos_box);
+  return true;
+}
+
 void ConvexCell::split(const BspPlane& plane, ConvexCell& negative, ConvexCell& positive) const {
   negative.faces_.clear();
   positive.faces_.clear();
@@ -173,6 +252,8 @@ void ConvexCell::split(const BspPlane& plane, ConvexCell& negative, ConvexCell& 
     negative.faces_.push_back(poly);
     positive.faces_.push_back(std::move(poly));
   }
+  negative.orient_faces();
+  positive.orient_faces();
 }
 
 }  // namespace raylab

@@ -5,7 +5,8 @@
 /// rounding of both dot products and on the rounding of the plane itself; a ray that may lie in a
 /// plane (n·d within its error bound of 0 and the origin within its error bound of the plane)
 /// visits both children over its whole interval, and a ray exactly parallel to a plane visits the
-/// side of its origin only when the origin is surely off the plane.
+/// side of its origin only when the origin is surely off the plane. Axis-aligned planes are taken
+/// in float as the kd-tree's splits.
 #include <cmath>
 #include <cstdint>
 
@@ -41,6 +42,27 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
     const BspNode* node = &tree.nodes[index];
     while (!node->is_leaf()) {
       counters.node();
+      const std::uint32_t negative = index + 1, positive = node->index;
+      if (const int a = node->axis(); a >= 0) {
+        // An axis-aligned plane, exactly as a kd-tree split (kd_cross): t* in float, widened by
+        // its rounding error; NaN (the ray lies in the plane) visits both sides over the whole
+        // interval; d[a] = ±0 gives inv = +inf and t* = ±inf, which keeps the origin's side.
+        const float t = (static_cast<float>(node->origin[a]) - ray.org[a]) * inv[a];
+        const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
+        const float t_lo = w0 < w1 ? w0 : w1, t_hi = w0 < w1 ? w1 : w0;
+        const std::uint32_t near = inv[a] > 0.0f ? negative : positive, far = inv[a] > 0.0f ? positive : negative;
+        if (t_lo > std::min(tmax, Kernel::closest(ctx))) {
+          index = near;
+        } else if (t_hi < tmin) {
+          index = far;
+        } else {
+          stack[top++] = {far, t_lo > tmin ? t_lo : tmin, tmax};
+          index = near;
+          tmax = t_hi < tmax ? t_hi : tmax;
+        }
+        node = &tree.nodes[index];
+        continue;
+      }
       const double* n = node->normal;
       const double qx = o.x - node->origin[0], qy = o.y - node->origin[1], qz = o.z - node->origin[2];
       const double s = n[0] * qx + n[1] * qy + n[2] * qz;
@@ -51,7 +73,6 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
       const double err_nd = (n[0] == 0.0 || d.x == 0.0) && (n[1] == 0.0 || d.y == 0.0) && (n[2] == 0.0 || d.z == 0.0)
                                 ? 0.0
                                 : kBspRelError * node->scale * (std::abs(d.x) + std::abs(d.y) + std::abs(d.z));
-      const std::uint32_t negative = index + 1, positive = node->index;
       if (std::abs(nd) <= err_nd) {
         if (err_nd == 0.0 && s > err_s) {
           index = positive;

@@ -1,6 +1,7 @@
 #include "accel/octree/octree_build.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace raylab {
@@ -38,6 +39,13 @@ class OctreeBuilder {
     out_.depth = std::max(out_.depth, depth);
   }
 
+  /// An empty child is not stored; it counts as a leaf of the tree all the same.
+  void count_empty_leaf(const Bounds3f& box, int depth) {
+    out_.sah_cost += config_.cost.leaf(0) * weight(box);
+    ++out_.leaves;
+    out_.depth = std::max(out_.depth, depth);
+  }
+
   void build(std::vector<PrimRef>& refs, const Bounds3f& box, int depth, std::uint32_t index) {
     const std::size_t n = refs.size();
     const double sa = surface_area_d(box);
@@ -63,9 +71,18 @@ class OctreeBuilder {
     std::vector<PrimRef>().swap(refs);
     out_.sah_cost += config_.cost.c_trav * weight(box);
     const auto first = static_cast<std::uint32_t>(out_.nodes.size());
-    out_.nodes[index] = {first, OctNode::kInterior};
-    out_.nodes.resize(out_.nodes.size() + 8);
-    for (unsigned i = 0; i < 8; ++i) build(child_refs[i], child_box[i], depth + 1, first + i);
+    std::uint32_t mask = 0;
+    for (unsigned i = 0; i < 8; ++i)
+      if (!child_refs[i].empty()) mask |= 1u << i;
+    out_.nodes[index] = {first, OctNode::kInterior | mask};
+    out_.nodes.resize(out_.nodes.size() + static_cast<std::size_t>(std::popcount(mask)));
+    for (unsigned i = 0; i < 8; ++i) {
+      if (child_refs[i].empty()) {
+        count_empty_leaf(child_box[i], depth + 1);
+        continue;
+      }
+      build(child_refs[i], child_box[i], depth + 1, out_.nodes[index].child(i));
+    }
   }
 
   const Scene& scene_;

@@ -22,7 +22,8 @@ struct OctreeData {
 /// Builds the octree. `scene` must not be instanced. Deterministic.
 OctreeData build_octree(const Scene& scene, const OctreeConfig& config);
 
-/// Calls f(box, first, count) for every leaf.
+/// Calls f(box, first, count) for every leaf, the empty children that are not stored included
+/// (count 0).
 template <class F>
 void for_each_octree_leaf(const OctreeData& data, F&& f) {
   struct Item {
@@ -38,7 +39,9 @@ void for_each_octree_leaf(const OctreeData& data, F&& f) {
       f(it.box, n.first, n.count);
       continue;
     }
-    for (unsigned i = 0; i < 8; ++i) todo.push_back({n.first + i, octree_child_box(it.box, i)});
+    for (unsigned i = 0; i < 8; ++i)
+      if (n.has_child(i)) todo.push_back({n.child(i), octree_child_box(it.box, i)});
+      else f(octree_child_box(it.box, i), 0u, 0u);
   }
 }
 

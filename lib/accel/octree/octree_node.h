@@ -1,6 +1,9 @@
 #pragma once
-/// An octree node: an interior node holds the index of its eight consecutive children (child i
-/// has bit a of i set when it is the upper half along axis a); a leaf holds a primitive range.
+/// An octree node (8 bytes): a leaf holds a primitive range; an interior node holds a mask of its
+/// non-empty children and the index of the first of them, stored consecutively in child order
+/// (child i has bit a of i set when it is the upper half along axis a). Empty children are not
+/// stored: the mask says a ray's walk can skip them without loading a node.
+#include <bit>
 #include <cstdint>
 
 #include "geometry/bounds.h"
@@ -8,11 +11,18 @@
 namespace raylab {
 
 struct OctNode {
-  static constexpr std::uint32_t kInterior = 0xffffffffu;
-  std::uint32_t first = 0;          ///< first child, or offset into the primitive index array
-  std::uint32_t count = kInterior;  ///< leaf primitive count, or kInterior
+  /// `count` at or above this marks an interior node, its low 8 bits the mask of stored children;
+  /// a leaf's count stays below it (a leaf lists distinct 32-bit primitive ids, none of them kInvalidId).
+  static constexpr std::uint32_t kInterior = 0xffffff00u;
+  std::uint32_t first = 0;          ///< first stored child, or offset into the primitive index array
+  std::uint32_t count = kInterior;  ///< leaf primitive count, or kInterior | mask of stored children
 
-  bool is_leaf() const { return count != kInterior; }
+  bool is_leaf() const { return count < kInterior; }
+  /// Interior: whether child i is stored (holds primitives), and its index when it is.
+  bool has_child(unsigned i) const { return (count >> i) & 1u; }
+  std::uint32_t child(unsigned i) const {
+    return first + static_cast<std::uint32_t>(std::popcount(count & 0xffu & ((1u << i) - 1u)));
+  }
 };
 
 /// The centre plane of `box` along `axis`, computed identically by builder and traversal.

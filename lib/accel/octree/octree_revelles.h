@@ -44,8 +44,9 @@ inline float oct_t_above(float t) { return std::max(t * (1.0f - kKdPlaneSlack), 
 
 /// The mirrored-frame walk over the leaves a ray crosses, front to back.
 ///
-///   leaf(index, box, t_enter, t_exit) -> bool: called for each leaf whose widened interval meets
-///     [tmin, min(tmax, cut())]; returning true ends the walk (an answered any-hit query).
+///   leaf(index, box, t_enter, t_exit) -> bool: called for each stored (non-empty) leaf whose
+///     widened interval meets [tmin, min(tmax, cut())]; returning true ends the walk (an answered
+///     any-hit query).
 ///   cut() -> float: the closest hit so far; cells entered after it are skipped.
 /// Returns true iff a leaf call returned true.
 template <class Leaf, class Cut, class Counters>
@@ -124,7 +125,8 @@ class OctreeRevellesWalk {
           ct0[a] = c & (1u << a) ? tm[a] : t0[a];
           ct1[a] = c & (1u << a) ? t1[a] : tm[a];
         }
-        if (visit(node.first + (c ^ mask_), octree_child_box(box, c ^ mask_), ct0, ct1)) return true;
+        const unsigned child = c ^ mask_;
+        if (node.has_child(child) && visit(node.child(child), octree_child_box(box, child), ct0, ct1)) return true;
       }
       // Next child (Table 2): through the face of the axis of min exit, and of any axis whose
       // exit ties it within the slack; leaving through a face of the node adds nothing.

@@ -68,7 +68,8 @@ bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counte
         counters.node();
       }
       if (e.level == 3) {
-        e = {octree_child_box(e.box, e.bits), node.first + e.bits, 0, 0, e.tmin, e.tmax};
+        if (!node.has_child(e.bits)) break;  // an empty child is not stored
+        e = {octree_child_box(e.box, e.bits), node.child(e.bits), 0, 0, e.tmin, e.tmax};
         continue;
       }
       const int a = e.level;
