@@ -27,16 +27,6 @@ struct Incidence {
   bool operator<(const Incidence& o) const { return feature != o.feature ? feature < o.feature : tri < o.tri; }
 };
 
-/// A ray from `distance` back along the unit direction `w` towards `p`, its float direction the
-/// difference of p and its rounded origin (so that it points at p as closely as floats allow), or
-/// w where the two round together.
-Ray ray_aimed_at(const Vec3d& p, const Vec3d& w, double distance) {
-  const Vec3f org(p - w * distance);
-  Vec3f dir(p - Vec3d(org));
-  if (dir == Vec3f(0.0f)) dir = Vec3f(w);
-  return Ray{org, dir, 0.0f, std::numeric_limits<float>::infinity()};
-}
-
 }  // namespace
 
 std::vector<std::uint32_t> weld_vertices(const TriangleMesh& mesh) {
@@ -129,7 +119,10 @@ std::vector<Ray> feature_rays(const TriangleMesh& mesh, MeshFeature feature, std
     }
     const double u1 = rng.uniform(), u2 = rng.uniform();
     const Vec3d w = Frame(-normals[f]).to_world(sample_uniform_cone(u1, u2, std::cos(cones[f])));
-    rays.push_back(ray_aimed_at(p, w, distance));
+    const Vec3f org(p - w * distance);
+    Vec3f dir(p - Vec3d(org));
+    if (dir == Vec3f(0.0f)) dir = Vec3f(w);
+    rays.push_back(Ray{org, dir, 0.0f, std::numeric_limits<float>::infinity()});
   }
   return rays;
 }
@@ -275,7 +268,11 @@ std::vector<Ray> grazing_edge_rays(const TriangleMesh& mesh, std::size_t n, doub
     const Vec3d across = normalize((n1 - n2) + (n1 + n2) * (g * limit));
     const double beta = (std::numbers::pi / 3.0) * (2.0 * rng.uniform() - 1.0);
     const Vec3d w = across * std::cos(beta) + along * std::sin(beta);
-    rays.push_back(ray_aimed_at(Vec3d(Vec3f(a + (b - a) * rng.uniform_open())), w, distance));
+    const Vec3d p = Vec3d(Vec3f(a + (b - a) * rng.uniform_open()));
+    const Vec3f org(p - w * distance);
+    Vec3f dir(p - Vec3d(org));
+    if (dir == Vec3f(0.0f)) dir = Vec3f(w);
+    rays.push_back(Ray{org, dir, 0.0f, std::numeric_limits<float>::infinity()});
   }
   return rays;
 }
