@@ -39,13 +39,19 @@ struct ContactColumns {
                        rays[0], rays[1], rays[2], rays[3]);
   }
 
+  /// 100·k/n with two significant digits, without an exponent ("0.38", "7.3", "88", "100").
+  static std::string percent(std::size_t k, std::size_t n) {
+    const double p = 100.0 * static_cast<double>(k) / static_cast<double>(n);
+    return p >= 10.0 ? fmt::format("{:.0f}", p) : fmt::format("{:.2g}", p);
+  }
+
   /// " 0 | 12 (0.5%) | – | ... |": mismatches and their rate, "–" where the column has no ray.
   std::string cells() const {
     std::string s;
     for (std::size_t i = 0; i < rays.size(); ++i)
       s += rays[i] == 0       ? " – |"
            : mismatches[i] == 0 ? " 0 |"
-                                : fmt::format(" {} ({:.2g}%) |", mismatches[i], 100.0 * mismatches[i] / rays[i]);
+                                : fmt::format(" {} ({}%) |", mismatches[i], percent(mismatches[i], rays[i]));
     return s;
   }
 };

@@ -117,6 +117,16 @@ TEST(ContactClasses, GeneratorsMakeTheClassesTheyPromise) {
   EXPECT_GE(ill, grazing.size() / 2);
 }
 
+// Vertex-aimed rays meet their vertex exactly: on a soup of lone triangles each such contact
+// is a touch, so a generator whose rays merely pass near the vertex (off by a rounding) fails.
+TEST(ContactClasses, VertexAimedRaysMeetTheirVertexExactly) {
+  const auto soup = make_scene("soup:n=200");
+  const auto classes = classify_contacts(soup, make_ray_set("vertices:256", soup));
+  std::size_t touch = 0;
+  for (const auto& c : classes) touch += c.contact == Contact::touching;
+  EXPECT_GE(touch, classes.size() * 9 / 10);
+}
+
 TEST(ContactClasses, RayExactlyThroughAPointPassesThroughItExactly) {
   const Vec3f p(1e4f + 0.125f, -3.0f, 0.7f);
   Ray ray;
