@@ -197,7 +197,7 @@ const char* kRule = "|---|---|---|---|---|---|---|---|\n";
 
 /// The goals for the octree and the BSP tree: each ≥ 0.6× the kd-tree's throughput on the
 /// same rays, the BSP build ≤ 5× the kd-tree's, geometric means over CGAL meshes, the stadium,
-/// walls and grass. The kd-tree is this branch's, built and traced in the same process: every
+/// walls and grass. The kd-tree is the default `kdtree`, built and traced in the same process: every
 /// pass traces the kd-tree, the octree, the BSP tree and Embree one after another, best pass of
 /// each kept; builds are single-threaded CPU time, best of as many builds (in full mode 3 while
 /// a build takes under 2 s). Writes spatial_octree_bsp.csv.
@@ -218,7 +218,7 @@ std::string octree_bsp_goals(const Options& opt) {
   std::string md = fmt::format(
       "\n#### Octree and BSP tree against the kd-tree\n\n"
       "Goals: octree and BSP tree each ≥ 0.6× the kd-tree's throughput on the same rays, BSP build ≤ 5× the "
-      "kd-tree's. The kd-tree is this branch's default; `{}`, single thread, watertight kernel; every pass traces "
+      "kd-tree's. The kd-tree is the default `kdtree`; `{}`, single thread, watertight kernel; every pass traces "
       "the four structures one after another, best of {} passes each; builds are CPU time of the building thread "
       "(best of {}, one build when it takes over 2 s). *vs kd* is the kd-tree's time over the structure's "
       "(throughput ratio); *build / kd* the build time over the kd-tree's.\n\n"
