@@ -165,6 +165,26 @@ TEST(RaysGenerators, PrimaryIsScanlineOrder) {
   }
 }
 
+TEST(RaysGenerators, InsideCameraLooksAtTheCentreFromInsideTheBox) {
+  const Scene scene = cube_scene();
+  const Vec3d from(1.0, 0.6, 1.4);
+  const Camera cam = inside_camera(scene.bounds(), 45.0, from);
+  // The ray centre + s·from/|from| leaves the unit cube at s = 0.5 / (1.4/|from|); the eye is 0.9 of the way.
+  const Vec3d expected = Vec3d(0.5) + normalize(from) * (kInsideCameraFraction * 0.5 / normalize(from).z);
+  EXPECT_NEAR(cam.eye.x, expected.x, 1e-12);
+  EXPECT_NEAR(cam.eye.y, expected.y, 1e-12);
+  EXPECT_NEAR(cam.eye.z, expected.z, 1e-12);
+  EXPECT_LT(cam.eye.z, 1.0);
+  EXPECT_NEAR(dot(cam.forward, -normalize(from)), 1.0, 1e-12);
+  const auto primary = generate_rays("primary:64,camera=inside", scene, {});
+  ASSERT_EQ(primary.size(), 64u);
+  for (const Ray& r : primary) EXPECT_TRUE(scene.bounds().contains(r.org));
+  // From inside a closed cube every bounce hits a face; from outside (the default) it cannot hit the convex cube.
+  const auto trace = tracer(scene);
+  for (const Ray& r : generate_rays("diffuse:300,camera=inside", scene, trace)) EXPECT_TRUE(trace(r).valid());
+  for (const Ray& r : generate_rays("diffuse:300", scene, trace)) EXPECT_FALSE(trace(r).valid());
+}
+
 TEST(RaysGenerators, SurfaceRaysLeaveTheVisibleSide) {
   const Scene scene = cube_scene();
   const auto trace = tracer(scene);
@@ -219,7 +239,7 @@ TEST(RaysGenerators, BadSpecsThrow) {
   for (const char* spec : {"bogus:10", "diffuse", "diffuse:0", "diffuse:268435457", "diffuse:x", "diffuse:10,foo=1",
                            "lines:10,fov=30", "primary:10,seed=3", "diffuse:10,seed=-1", "primary:10,fov=0",
                            "primary:10,from=1;2", "primary:10,from=0;0;0", "lines:10,20", "file:",
-                           "file:/nonexistent/rays.txt"}) {
+                           "file:/nonexistent/rays.txt", "primary:10,camera=behind", "lines:10,camera=inside"}) {
     EXPECT_THROW(generate_rays(spec, scene, trace), InputError) << spec;
   }
   try {

@@ -123,6 +123,27 @@ TEST(SceneSpecs, RoomEnclosesTheObjectAndMakesBouncesHit) {
   EXPECT_LT(2 * trace_rays(*alone, diffuse, TraceOptions{1, false, false}).hit_count, bounced.hit_count);
 }
 
+TEST(SceneSpecs, ClosedRoomSeenFromInsideHitsEveryBounce) {
+  const auto object = make_scene("sphere:n=200");
+  const auto s = make_scene("room:of=(sphere:n=200),window=0");
+  EXPECT_EQ(s->triangle_count(), object->triangle_count() + 12);
+  EXPECT_TRUE(describe(*s).closed);
+  const auto embree = make_accelerator("embree-robust", s);
+  const auto primary = make_ray_set("primary:4096,camera=inside", s);
+  const TraceResult seen = trace_rays(*embree, primary, TraceOptions{1, false, false});
+  EXPECT_EQ(seen.hit_count, primary.size());
+  EXPECT_TRUE(std::any_of(seen.hits.begin(), seen.hits.end(),
+                          [&](const Hit& h) { return h.prim < object->triangle_count(); }));
+  const auto diffuse = make_ray_set("diffuse:4096,camera=inside", s);
+  EXPECT_EQ(trace_rays(*embree, diffuse, TraceOptions{1, false, false}).hit_count, diffuse.size());
+  // From outside, the closed room hides the object: every primary hit is on a wall.
+  const TraceResult outside =
+      trace_rays(*embree, make_ray_set("primary:1024", s), TraceOptions{1, false, false});
+  EXPECT_TRUE(std::none_of(outside.hits.begin(), outside.hits.end(), [&](const Hit& h) {
+    return h.valid() && h.prim < object->triangle_count();
+  }));
+}
+
 TEST(SceneSpecs, SoupIsDeterministic) {
   const auto a = make_scene("soup:n=1000");
   const auto b = make_scene("soup:n=1000,seed=1");
@@ -204,7 +225,7 @@ TEST(SceneSpecs, ErrorsAreInputErrors) {
                            "walls:angle=nan", "soup:n=-1", "cgal:no_such_mesh", "cgal", "cgal:a,b", "cgal:bunny00,x=1",
                            "file:/no/such/file.off", "/no/such/file.ply", "instances:of=(sphere:n=100),count=0",
                            "stadium:object=(sphere:n=100),ratio=0", "sphere:5", "room:margin=0",
-                           "room:of=(sphere:n=100),margin=nan", "room:window=1",
+                           "room:of=(sphere:n=100),margin=nan", "room:window=1", "room:window=0.01",
                            "room:of=(instances:of=(sphere:n=100),count=2)"}) {
     SCOPED_TRACE(spec);
     EXPECT_THROW(make_scene(spec), InputError);

@@ -73,6 +73,7 @@ TEST(ToolCli, BadInputGivesOneErrorLineAndExitStatusTwo) {
       "trace --scene 'transformed:of=(sphere:radius=1e10),scale=1e30'",
       "trace --scene soup:n=100 --rays touching:10",
       "render --scene soup:n=100 --log --out /tmp/raylab_cli_log.png",
+      "render --scene soup:n=100 --camera behind --out /tmp/raylab_cli_camera.png",
   };
   for (const auto& args : cases) {
     const ToolRun r = run_tool(args);

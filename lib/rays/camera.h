@@ -30,6 +30,16 @@ inline constexpr double kDefaultFovDegrees = 45.0;
 Camera frame_camera(const Bounds3f& bounds, double fov_degrees = kDefaultFovDegrees,
                     const Vec3d& from = kDefaultCameraFrom);
 
+/// Where an inside camera's eye lies on the segment from the box centre to the box boundary.
+inline constexpr double kInsideCameraFraction = 0.9;
+
+/// A camera inside `bounds` that looks at its centre: the eye lies in direction `from` from the
+/// centre, kInsideCameraFraction of the way to the box boundary (the centre itself for a box that
+/// is flat across that direction). Meant for enclosed scenes (`room:...,window=0`), whose inside
+/// an outside camera cannot see. Same field of view, image up and errors as frame_camera.
+Camera inside_camera(const Bounds3f& bounds, double fov_degrees = kDefaultFovDegrees,
+                     const Vec3d& from = kDefaultCameraFrom);
+
 /// The ray through image point (px, py) of a W×H image (square pixels, aspect W/H): origin at
 /// the eye, unit direction (rounded to float), tmin = 0, tmax = inf.
 Ray camera_ray(const Camera& camera, double px, double py, int width, int height);

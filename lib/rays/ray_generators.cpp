@@ -15,6 +15,10 @@ namespace {
 const ParamDoc kSeedDoc{"seed", "1", "random seed (0 .. 2^63-1)"};
 const ParamDoc kFovDoc{"fov", "45", "vertical field of view of the camera, degrees"};
 const ParamDoc kFromDoc{"from", "1;0.6;1.4", "direction from the scene centre to the camera, x;y;z"};
+const ParamDoc kCameraDoc{"camera", "outside",
+                          "outside: the eye outside the scene box, framing it; inside: the eye inside the box, "
+                          "0.9 of the way from its centre toward `from`, looking at the centre (for enclosed "
+                          "scenes such as room:...,window=0; camera.h)"};
 
 const std::vector<RayGeneratorDoc>& docs() {
   static const std::vector<RayGeneratorDoc> d = {
@@ -22,19 +26,19 @@ const std::vector<RayGeneratorDoc>& docs() {
        "Camera rays through pixel centres of a W×W image, W = round(sqrt(N)) (N is rounded to a square), in "
        "scanline order: ray i is pixel (i % W, i / W). The pinhole camera looks at the centre of the scene box from "
        "`from` at the distance where the bounding sphere fills the field of view (camera.h).",
-       {kFovDoc, kFromDoc}},
+       {kFovDoc, kFromDoc, kCameraDoc}},
       {"diffuse", "diffuse:N",
        "Cosine-weighted bounces from the surfaces the primary camera sees (surface_rays.h): origin offset off the "
        "surface (Wächter & Binder), unit direction, tmax = inf.",
-       {kSeedDoc, kFovDoc, kFromDoc}},
+       {kSeedDoc, kFovDoc, kFromDoc, kCameraDoc}},
       {"shadow", "shadow:N",
        "From the surfaces the primary camera sees toward uniform points of a square area light above the scene; "
        "direction = light - origin, tmax just below 1 (for occlusion queries).",
-       {kSeedDoc, kFovDoc, kFromDoc}},
+       {kSeedDoc, kFovDoc, kFromDoc, kCameraDoc}},
       {"ao", "ao:N",
        "Ambient-occlusion rays: cosine-weighted from the surfaces the primary camera sees, tmax = 0.1 x the scene "
        "diagonal.",
-       {kSeedDoc, kFovDoc, kFromDoc}},
+       {kSeedDoc, kFovDoc, kFromDoc, kCameraDoc}},
       {"lines", "lines:N",
        "Isotropic random lines through the scene's bounding sphere (centre of the box, radius 1.01 x half the "
        "diagonal) under the invariant measure of Cauchy-Crofton (isotropic_lines.h); each ray spans a whole chord.",
@@ -109,6 +113,7 @@ std::vector<Ray> generate_rays(const std::string& spec, const Scene& scene, cons
   const bool camera_based = name == "primary" || name == "diffuse" || name == "shadow" || name == "ao";
   const double fov = camera_based ? r.get_double("fov", kDefaultFovDegrees, 1.0, 179.0) : kDefaultFovDegrees;
   const Vec3d from = camera_based ? read_from(r) : kDefaultCameraFrom;
+  const std::string placement = camera_based ? r.get_choice("camera", "outside", {"outside", "inside"}) : "outside";
   const auto seed = name == "primary" ? kDefaultRaySeed
                                       : static_cast<std::uint64_t>(r.get_int(
                                             "seed", static_cast<std::int64_t>(kDefaultRaySeed), 0,
@@ -117,7 +122,8 @@ std::vector<Ray> generate_rays(const std::string& spec, const Scene& scene, cons
   const Bounds3f bounds = checked_bounds(scene, spec);
 
   if (camera_based) {
-    const Camera camera = frame_camera(bounds, fov, from);
+    const Camera camera =
+        placement == "inside" ? inside_camera(bounds, fov, from) : frame_camera(bounds, fov, from);
     if (name == "primary") {
       const int w = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(count)))));
       return image_rays(camera, w, w);

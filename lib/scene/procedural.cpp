@@ -255,7 +255,8 @@ Scene make_walls(const WallsConfig& c) {
 Scene make_room(const Scene& object, const RoomConfig& c) {
   require(!object.instanced(), "room: the object " + object.spec + " must not be instanced");
   require(std::isfinite(c.margin) && c.margin >= 0.01 && c.margin <= 100, "room: margin must be in [0.01, 100]");
-  require(std::isfinite(c.window) && c.window >= 0.05 && c.window <= 0.95, "room: window must be in [0.05, 0.95]");
+  require(std::isfinite(c.window) && (c.window == 0 || (c.window >= 0.05 && c.window <= 0.95)),
+          "room: window must be 0 (a closed room) or in [0.05, 0.95]");
   const Bounds3f ob = object.bounds();
   require(!ob.empty(), "room: the object " + object.spec + " is empty");
   const Vec3d extent(ob.diagonal());
@@ -287,6 +288,10 @@ Scene make_room(const Scene& object, const RoomConfig& c) {
     m.triangles.push_back({base, base + 2, base + 3});
   };
   const double a = 0.5 * (1.0 - c.window), b = 1.0 - a;
+  if (c.window == 0) {  // a closed room: one box, its 8 corners shared by its 12 triangles
+    append_box(m, lo, hi, AffineTransform::identity());
+    return s;
+  }
   for (int axis = 0; axis < 3; ++axis) {
     quad(axis, 0, 0, 0, 1, 1);
     quad(axis, 1, 0, 0, a, 1);  // the window frame: left and right columns,

@@ -78,14 +78,16 @@ struct WallsConfig {
 };
 Scene make_walls(const WallsConfig& c);
 
-/// `room:of=SPEC,margin=M,window=W` — the object SPEC inside a closed room: an axis-aligned box
-/// around the object's bounding box, grown on every side by M times the box's largest extent.
-/// The three faces turned to the default camera (+x, +y, +z) each have a central square window
-/// of W times the face's side, so camera-based rays see the object; the other faces are solid.
-/// A path-tracing workload: bounces from the object and the inner walls mostly hit a wall or the
-/// object (of diffuse rays from all camera-seen surfaces, which include the frames' outsides,
-/// about 37% hit, against a few percent for the bare object). margin in [0.01, 100], default
-/// 0.25; window in [0.05, 0.95], default 0.8.
+/// `room:of=SPEC,margin=M,window=W` — the object SPEC inside a room: an axis-aligned box around
+/// the object's bounding box, grown on every side by M times the box's largest extent.
+/// With W > 0 the three faces turned to the default camera (+x, +y, +z) each have a central
+/// square window of W times the face's side, so an outside camera sees the object; the other
+/// faces are solid. Of diffuse rays from all the surfaces the outside camera sees (the frames'
+/// outsides included) about 37% hit, against a few percent for the bare object.
+/// With W = 0 every face is solid: a closed room, the path-tracing workload in which every
+/// bounce hits; trace it with rays from an inside camera (`diffuse:N,camera=inside`,
+/// rays/ray_generators.h). margin in [0.01, 100], default 0.25; window 0 or in [0.05, 0.95],
+/// default 0.8.
 struct RoomConfig {
   double margin = 0.25;
   double window = 0.8;

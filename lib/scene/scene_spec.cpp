@@ -151,7 +151,7 @@ std::shared_ptr<Scene> build(const std::string& text) {
     RoomConfig c;
     const std::string object = r.get_string("of", "cgal:bunny00");
     c.margin = r.get_double("margin", c.margin, 0.01, 100);
-    c.window = r.get_double("window", c.window, 0.05, 0.95);
+    c.window = r.get_double("window", c.window, 0.0, 0.95);
     r.finish(params);
     *scene = make_room(*make_scene(object), c);
   } else if (name == "soup") {
@@ -300,10 +300,12 @@ const std::vector<SceneKindDoc>& scene_kinds() {
         {"length", "10", "wall length"},
         {"thickness", "0.05", "wall thickness"},
         {"spacing", "0.5", "distance between rows"}}},
-      {"room", "an object inside a closed box room, windows in the three faces toward the default camera",
+      {"room", "an object inside a box room, windows in the three faces toward the default camera unless window=0",
        {{"of", "cgal:bunny00", "the object's scene spec (parenthesise nested specs)"},
         {"margin", "0.25", "room grows the object's box by margin x its largest extent per side, in [0.01, 100]"},
-        {"window", "0.8", "side of each window over its face's side, in [0.05, 0.95]"}}},
+        {"window", "0.8",
+         "side of each window over its face's side, in [0.05, 0.95]; 0: a closed room (trace it with "
+         "camera=inside rays)"}}},
       {"soup", "independent random triangles in the unit cube",
        {{"n", "10000", "number of triangles, in [1, 2^27]"},
         {"size", "0", "triangle size; 0 = n^(-1/3)"},
