@@ -6,9 +6,12 @@
 /// plane (n·d within its error bound of 0 and the origin within its error bound of the plane)
 /// visits both children over its whole interval, and a ray exactly parallel to a plane visits the
 /// side of its origin only when the origin is surely off the plane. Axis-aligned planes are taken
-/// in float as the kd-tree's splits.
+/// in float as the kd-tree's splits. A leaf's triangles are tested 4-wide when the tree's leaves
+/// are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
 #include <cmath>
 #include <cstdint>
+#include <span>
+#include <vector>
 
 #include "accel/bsp/bsp_node.h"
 #include "accel/bsp/bsp_plane.h"
@@ -21,7 +24,30 @@ struct BspTreeView {
   const std::uint32_t* prims;
   const Scene* scene;
   Bounds3f bounds;
+  /// The leaves packed 4-wide (bsp_pack_leaves), or null: a leaf's `index` then is the offset of
+  /// its primitive ids in `prims`.
+  const TrianglePacket* packets = nullptr;
 };
+
+/// A copy of `nodes` whose leaves hold the index of their first packet in `packets` instead of
+/// an offset into `prims`; the leaves' triangles are packed in leaf order (pack_leaf). Both stay
+/// empty when the scene holds a sphere (traversal then reads `prims` and the scene).
+inline void bsp_pack_leaves(const Scene& scene, const std::vector<BspNode>& nodes,
+                            const std::vector<std::uint32_t>& prims, std::vector<BspNode>& packed_nodes,
+                            std::vector<TrianglePacket>& packets) {
+  if (!scene.spheres.empty()) return;
+  std::size_t count = 0;
+  for (const BspNode& n : nodes)
+    if (n.is_leaf()) count += (n.count + kPacketWidth - 1) / kPacketWidth;
+  packets.reserve(count);
+  packed_nodes = nodes;
+  for (BspNode& n : packed_nodes)
+    if (n.is_leaf()) {
+      const auto first = static_cast<std::uint32_t>(packets.size());
+      pack_leaf(scene, std::span<const std::uint32_t>(prims.data() + n.index, n.count), packets);
+      n.index = first;
+    }
+}
 
 template <class Kernel, bool kAnyHit, class Counters>
 bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
@@ -29,6 +55,8 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
   float tmin, tmax;
   if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
   auto ctx = Kernel::prepare(ray);
+  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
+  KdMailbox<false> no_mailbox;
   const Vec3d o(ray.org), d(ray.dir);
   struct Entry {
     std::uint32_t node;
@@ -99,13 +127,16 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
       }
       node = &tree.nodes[index];
     }
-    counters.leaf();
-    const std::uint32_t* p = tree.prims + node->index;
-    for (std::uint32_t i = 0; i < node->count; ++i)
-      if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
-        found = true;
-        if constexpr (kAnyHit) return true;
-      }
+    const bool h = tree.packets != nullptr
+                       ? kd_test_packed_leaf<Kernel, kAnyHit, false>(tree.packets + node->index, node->count, ctx,
+                                                                     packet_ray, hit, no_mailbox, counters)
+                       : (counters.leaf(), kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node->index,
+                                                                                node->count, ctx, hit, no_mailbox,
+                                                                                counters));
+    if (h) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
     do {
       if (top == 0) return found;
       --top;
