@@ -7,10 +7,14 @@
 namespace raylab {
 
 Octree::Octree(std::shared_ptr<const Scene> scene, const OctreeConfig& config)
-    : scene_(std::move(scene)), config_(config), data_(build_octree(*scene_, config_)) {}
+    : scene_(std::move(scene)), config_(config), data_(build_octree(*scene_, config_)) {
+  octree_pack_leaves(*scene_, data_.nodes, data_.prims, packed_nodes_, packets_);
+}
 
 AccelStats Octree::stats() const {
-  return {data_.nodes.size() * sizeof(OctNode) + data_.prims.size() * sizeof(std::uint32_t), data_.nodes.size(),
+  return {(data_.nodes.size() + packed_nodes_.size()) * sizeof(OctNode) + data_.prims.size() * sizeof(std::uint32_t) +
+              packets_.size() * sizeof(TrianglePacket),
+          data_.nodes.size(),
           data_.sah_cost};
 }
 
@@ -25,8 +29,10 @@ OctreeConfig read_octree_config(SpecReader& r) {
   read_sah_constants(r, "octree", 8.0, 1.5, c.cost);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 20));
   c.mailbox = r.get_bool("mailbox", false);
-  c.traversal = r.get_choice("traversal", "revelles", {"revelles", "kd"}) == "kd" ? OctreeTraversal::kd
-                                                                                 : OctreeTraversal::revelles;
+  const std::string traversal = r.get_choice("traversal", "stack", {"stack", "revelles", "kd"});
+  c.traversal = traversal == "kd"         ? OctreeTraversal::kd
+                : traversal == "revelles" ? OctreeTraversal::revelles
+                                          : OctreeTraversal::stack;
   c.kernel = read_kernel_choice(r);
   return c;
 }
@@ -53,14 +59,15 @@ AccelKind make_octree_kind() {
            fitted_cost_param(),
            {"max_depth", "0", "safety depth limit; 0 = 3 + ceil(log8 N), at most 20"},
            {"mailbox", "off", "skip primitives a ray already tested"},
-           {"traversal", "revelles",
-            "revelles (parametric, Revelles et al. 2000) | kd (centre planes as three kd-tree splits)"},
+           {"traversal", "stack",
+            "stack (iterative, crossings ordered per node) | revelles (parametric, Revelles et al. 2000) | kd (centre "
+            "planes as three kd-tree splits)"},
            kernel_param_doc()},
           [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_octree(std::move(scene), read_octree_config(r)); },
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_octree_config(r).kernel, "conservative placement and traversal");
           },
-          {"clip=none", "clip=bbox,mailbox=on,c_trav=1", "traversal=kd", "clip=none,traversal=kd,mailbox=on", "cost=default",
+          {"clip=none", "clip=bbox,mailbox=on,c_trav=1", "traversal=revelles", "traversal=kd", "clip=none,traversal=kd,mailbox=on", "cost=default",
            "kernel=certified", "kernel=certified,traversal=kd,clip=bbox,mailbox=on"}};
 }
 

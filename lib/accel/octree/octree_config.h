@@ -7,6 +7,7 @@
 namespace raylab {
 
 enum class OctreeTraversal {
+  stack,     ///< iterative, explicit stack, crossings ordered per node (octree_traverse_stack)
   revelles,  ///< Revelles, Ureña and Lastra 2000: parametric, first-node and next-node tables, mirroring
   kd,        ///< the three centre planes of a node taken as three kd-tree splits
 };
@@ -24,7 +25,7 @@ struct OctreeConfig {
   int max_depth = 0;
   /// Remember the last primitives tested by a ray and skip repeats.
   bool mailbox = false;
-  OctreeTraversal traversal = OctreeTraversal::revelles;
+  OctreeTraversal traversal = OctreeTraversal::stack;
   KernelChoice kernel = KernelChoice::watertight;
 };
 
