@@ -108,6 +108,10 @@ bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counte
         continue;
       }
       const int a = e.level;
+      if (!(octree_split_axes(e.box) & (1u << a))) {  // not split along a: the lower child's range is the box's
+        ++e.level;
+        continue;
+      }
       float t = (octree_mid(e.box, a) - ray.org[a]) * inv[a];
       if (std::isnan(t)) t = 0.0f;
       const float slack = std::isfinite(t) ? kKdPlaneSlack * std::abs(t) : 0.0f;
@@ -185,9 +189,14 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
       const float tcut = std::min(tmax, Kernel::closest(ctx));
       float mid[3], lo[3], hi[3];
       unsigned c0 = 0, crossed = 0;
+      const unsigned split = octree_split_axes(box);
       for (int a = 0; a < 3; ++a) {
-        mid[a] = octree_mid(box, a);
-        const float t = (mid[a] - ray.org[a]) * inv[a];  // NaN: the ray lies in the plane
+        // An axis that is not split keeps the lower child (real bit 0): its plane at +inf on the
+        // near side's, -inf when the near half is the upper one; the child's range is the box's.
+        const bool is_split = split & (1u << a);
+        mid[a] = is_split ? octree_mid(box, a) : box.hi[a];
+        const float t = is_split ? (mid[a] - ray.org[a]) * inv[a]  // NaN: the ray lies in the plane
+                                 : (flip & (1u << a) ? -kInf : kInf);
         const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
         lo[a] = std::max(-kInf, w0 < w1 ? w0 : w1);  // NaN -> -inf
         hi[a] = std::min(kInf, w0 < w1 ? w1 : w0);   // NaN -> +inf
