@@ -20,7 +20,7 @@ OctreeConfig octree_config(const std::string& params) {
 TEST(Octree, ExactClippingLosesNoTriangle) {
   for (const std::string spec : {"soup:n=600", "walls:n=6,angle=30", "grass:blades=100"}) {
     const auto scene = make_scene(spec);
-    const Octree tree(scene, octree_config(""));
+    const Octree tree(scene, octree_config("c_trav=8"));  // a deep tree: many clipped leaves
     std::size_t leaves = 0;
     for_each_octree_leaf(tree.data(), [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
       ++leaves;
@@ -86,7 +86,7 @@ TEST(Octree, RaysAlongCentrePlanesAgreeWithBruteForce) {
 /// whose box the ray crosses over an interval of positive length (computed in double).
 TEST(Octree, RevellesVisitsLeavesFrontToBackAndMissesNone) {
   const auto scene = make_scene("soup:n=1500");
-  const Octree tree(scene, octree_config(""));
+  const Octree tree(scene, octree_config("c_trav=8"));  // a deep tree: many leaves
   const Bounds3f root = tree.data().bounds;
   std::vector<std::pair<Bounds3f, std::uint32_t>> leaves;  // box, node index: the stored (non-empty) leaves
   {
@@ -154,7 +154,7 @@ TEST(Octree, RevellesVisitsLeavesFrontToBackAndMissesNone) {
 TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
   for (const std::string spec : {"soup:n=800", "walls:n=6,angle=30", "grass:blades=150"}) {
     const auto scene = make_scene(spec);
-    const Octree probe(scene, octree_config(""));
+    const Octree probe(scene, octree_config("c_trav=8"));  // a deep tree: many node centres
     std::vector<Ray> rays;
     std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0, probe.data().bounds}};
     while (!todo.empty() && rays.size() < 6000) {
@@ -187,7 +187,8 @@ TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
     const auto ref_o = trace_rays(*oracle, rays, TraceOptions{1, false, true});
     EXPECT_GT(ref.hit_count, 0u);
     for (const std::string accel_spec :
-         {"octree", "octree:clip=none,mailbox=on", "octree:traversal=kd", "octree:traversal=revelles"}) {
+         {"octree:c_trav=8", "octree:c_trav=8,clip=none,mailbox=on", "octree:c_trav=8,traversal=kd",
+          "octree:c_trav=8,traversal=revelles"}) {
       const auto accel = make_accelerator(accel_spec, scene);
       const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
       EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, diag).mismatches, 0u) << accel_spec << " on " << spec;
