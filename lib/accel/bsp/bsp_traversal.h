@@ -10,11 +10,12 @@
 /// are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
 #include <cmath>
 #include <cstdint>
-#include <span>
+#include <utility>
 #include <vector>
 
 #include "accel/bsp/bsp_node.h"
 #include "accel/bsp/bsp_plane.h"
+#include "accel/common/packed_tree_leaves.h"
 #include "accel/kdtree/kdtree_traversal.h"
 
 namespace raylab {
@@ -29,24 +30,18 @@ struct BspTreeView {
   const TrianglePacket* packets = nullptr;
 };
 
-/// A copy of `nodes` whose leaves hold the index of their first packet in `packets` instead of
-/// an offset into `prims`; the leaves' triangles are packed in leaf order (pack_leaf). Both stay
-/// empty when the scene holds a sphere (traversal then reads `prims` and the scene).
+/// The leaves of `nodes` packed 4-wide (pack_tree_leaves): `packed_nodes` is a copy of `nodes`
+/// whose leaves index `packets`; both stay empty when the scene holds a sphere.
 inline void bsp_pack_leaves(const Scene& scene, const std::vector<BspNode>& nodes,
                             const std::vector<std::uint32_t>& prims, std::vector<BspNode>& packed_nodes,
                             std::vector<TrianglePacket>& packets) {
-  if (!scene.spheres.empty()) return;
-  std::size_t count = 0;
-  for (const BspNode& n : nodes)
-    if (n.is_leaf()) count += (n.count + kPacketWidth - 1) / kPacketWidth;
-  packets.reserve(count);
-  packed_nodes = nodes;
-  for (BspNode& n : packed_nodes)
-    if (n.is_leaf()) {
-      const auto first = static_cast<std::uint32_t>(packets.size());
-      pack_leaf(scene, std::span<const std::uint32_t>(prims.data() + n.index, n.count), packets);
-      n.index = first;
-    }
+  pack_tree_leaves(
+      scene, nodes, prims,
+      [](BspNode& n) -> std::pair<std::uint32_t*, std::uint32_t> {
+        if (!n.is_leaf()) return {nullptr, 0u};
+        return {&n.index, n.count};
+      },
+      packed_nodes, packets);
 }
 
 template <class Kernel, bool kAnyHit, class Counters>

@@ -13,10 +13,11 @@
 #include <cmath>
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 #include <limits>
-#include <span>
 #include <vector>
 
+#include "accel/common/packed_tree_leaves.h"
 #include "accel/kdtree/kdtree_traversal.h"
 #include "accel/octree/octree_node.h"
 #include "accel/octree/octree_revelles.h"
@@ -33,24 +34,18 @@ struct OctreeView {
   const TrianglePacket* packets = nullptr;
 };
 
-/// A copy of `nodes` whose leaves hold the index of their first packet in `packets` instead of
-/// an offset into `prims`; the leaves' triangles are packed in leaf order (pack_leaf). Both stay
-/// empty when the scene holds a sphere (traversal then reads `prims` and the scene).
+/// The leaves of `nodes` packed 4-wide (pack_tree_leaves): `packed_nodes` is a copy of `nodes`
+/// whose leaves index `packets`; both stay empty when the scene holds a sphere.
 inline void octree_pack_leaves(const Scene& scene, const std::vector<OctNode>& nodes,
                                const std::vector<std::uint32_t>& prims, std::vector<OctNode>& packed_nodes,
                                std::vector<TrianglePacket>& packets) {
-  if (!scene.spheres.empty()) return;
-  std::size_t count = 0;
-  for (const OctNode& n : nodes)
-    if (n.is_leaf()) count += (n.count + kPacketWidth - 1) / kPacketWidth;
-  packets.reserve(count);
-  packed_nodes = nodes;
-  for (OctNode& n : packed_nodes)
-    if (n.is_leaf()) {
-      const auto first = static_cast<std::uint32_t>(packets.size());
-      pack_leaf(scene, std::span<const std::uint32_t>(prims.data() + n.first, n.count), packets);
-      n.first = first;
-    }
+  pack_tree_leaves(
+      scene, nodes, prims,
+      [](OctNode& n) -> std::pair<std::uint32_t*, std::uint32_t> {
+        if (!n.is_leaf()) return {nullptr, 0u};
+        return {&n.first, n.count};
+      },
+      packed_nodes, packets);
 }
 
 /// Tests the primitives of a leaf, 4-wide when the leaves are packed (kd_test_packed_leaf, bit-identical
