@@ -1,8 +1,9 @@
 #pragma once
 /// An octree node (8 bytes): a leaf holds a primitive range; an interior node holds a mask of its
-/// non-empty children (octree_split_axes: a flat node has four or two) and the index of the first of them, stored consecutively in child order
-/// (child i has bit a of i set when it is the upper half along axis a). Empty children are not
-/// stored: the mask says a ray's walk can skip them without loading a node.
+/// non-empty children (eight, or four or two for a flat node: octree_split_axes) and the index of
+/// the first of them, stored consecutively in child order (child i has bit a of i set when it is
+/// the upper half along axis a). Empty children are not stored: the mask says a ray's walk can
+/// skip them without loading a node.
 #include <algorithm>
 #include <bit>
 #include <cstdint>

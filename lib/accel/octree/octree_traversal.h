@@ -10,11 +10,11 @@
 ///    same children in the same order as Revelles's algorithm, by a different mechanism (up to
 ///    three plane crossings per node instead of one ordered walk over the eight children), and
 ///    is kept for comparison.
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
-#include <utility>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "accel/common/packed_tree_leaves.h"
@@ -186,8 +186,9 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
       unsigned c0 = 0, crossed = 0;
       const unsigned split = octree_split_axes(box);
       for (int a = 0; a < 3; ++a) {
-        // An axis that is not split keeps the lower child (real bit 0): its plane at +inf on the
-        // near side's, -inf when the near half is the upper one; the child's range is the box's.
+        // Along an axis that is not split (octree_split_axes) the only child is the real lower
+        // one over the box's range: its plane goes to +inf when the lower half is the near one
+        // (never crossed), to -inf when it is the far one (crossed before entry).
         const bool is_split = split & (1u << a);
         mid[a] = is_split ? octree_mid(box, a) : box.hi[a];
         const float t = is_split ? (mid[a] - ray.org[a]) * inv[a]  // NaN: the ray lies in the plane
@@ -231,7 +232,11 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
             else out = std::min(out, hi[a]);
           if (!(in <= out)) continue;
           int k = kids++;  // insertion by entry
-          for (; k > 0 && kid_in[k - 1] > in; --k) kid[k] = kid[k - 1], kid_in[k] = kid_in[k - 1], kid_out[k] = kid_out[k - 1];
+          for (; k > 0 && kid_in[k - 1] > in; --k) {
+            kid[k] = kid[k - 1];
+            kid_in[k] = kid_in[k - 1];
+            kid_out[k] = kid_out[k - 1];
+          }
           kid[k] = real, kid_in[k] = in, kid_out[k] = out;
         }
       }
@@ -277,7 +282,8 @@ bool octree_traverse_revelles(const OctreeView& tree, const Ray& ray, Hit& hit, 
   KdMailbox<kMailbox> mailbox;
   bool found = false;
   auto leaf = [&](std::uint32_t index, const Bounds3f&, float, float) {
-    const bool in_leaf = octree_test_leaf<Kernel, kAnyHit>(tree, tree.nodes[index], ctx, packet_ray, hit, mailbox, counters);
+    const bool in_leaf =
+        octree_test_leaf<Kernel, kAnyHit>(tree, tree.nodes[index], ctx, packet_ray, hit, mailbox, counters);
     found = found || in_leaf;
     return kAnyHit && in_leaf;
   };
