@@ -122,12 +122,15 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
       }
       node = &tree.nodes[index];
     }
-    const bool h = tree.packets != nullptr
-                       ? kd_test_packed_leaf<Kernel, kAnyHit, false>(tree.packets + node->index, node->count, ctx,
-                                                                     packet_ray, hit, no_mailbox, counters)
-                       : (counters.leaf(), kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node->index,
-                                                                                node->count, ctx, hit, no_mailbox,
-                                                                                counters));
+    bool h;
+    if (tree.packets != nullptr) {
+      h = kd_test_packed_leaf<Kernel, kAnyHit, false>(tree.packets + node->index, node->count, ctx, packet_ray, hit,
+                                                      no_mailbox, counters);
+    } else {
+      counters.leaf();
+      h = kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node->index, node->count, ctx, hit, no_mailbox,
+                                              counters);
+    }
     if (h) {
       found = true;
       if constexpr (kAnyHit) return true;
