@@ -69,7 +69,10 @@ TEST(Octree, RaysAlongCentrePlanesAgreeWithBruteForce) {
     }
     const auto brute = make_accelerator("brute", scene);
     const double diag = length(Vec3d(scene->bounds().diagonal()));
-    for (const std::string accel_spec : {"octree", "octree:clip=none", "octree:clip=bbox,mailbox=on", "octree:traversal=kd"}) {
+    // Deep trees (c_trav=8), so that the rays run along the planes of many nodes.
+    for (const std::string accel_spec :
+         {"octree:c_trav=8", "octree:c_trav=8,clip=none", "octree:c_trav=8,clip=bbox,mailbox=on",
+          "octree:c_trav=8,traversal=kd", "octree:c_trav=8,traversal=revelles"}) {
       const auto accel = make_accelerator(accel_spec, scene);
       const auto ref = trace_rays(*brute, rays, TraceOptions{1, false, false});
       const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
