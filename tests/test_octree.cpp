@@ -20,7 +20,7 @@ OctreeConfig octree_config(const std::string& params) {
 TEST(Octree, ExactClippingLosesNoTriangle) {
   for (const std::string spec : {"soup:n=600", "walls:n=6,angle=30", "grass:blades=100"}) {
     const auto scene = make_scene(spec);
-    const Octree tree(scene, octree_config(""));
+    const Octree tree(scene, octree_config("c_trav=8"));  // a deep tree: many clipped leaves
     std::size_t leaves = 0;
     for_each_octree_leaf(tree.data(), [&](const Bounds3f& box, std::uint32_t first, std::uint32_t count) {
       ++leaves;
@@ -69,7 +69,10 @@ TEST(Octree, RaysAlongCentrePlanesAgreeWithBruteForce) {
     }
     const auto brute = make_accelerator("brute", scene);
     const double diag = length(Vec3d(scene->bounds().diagonal()));
-    for (const std::string accel_spec : {"octree", "octree:clip=none", "octree:clip=bbox,mailbox=on", "octree:traversal=kd"}) {
+    // Deep trees (c_trav=8), so that the rays run along the planes of many nodes.
+    for (const std::string accel_spec :
+         {"octree:c_trav=8", "octree:c_trav=8,clip=none", "octree:c_trav=8,clip=bbox,mailbox=on",
+          "octree:c_trav=8,traversal=kd", "octree:c_trav=8,traversal=revelles"}) {
       const auto accel = make_accelerator(accel_spec, scene);
       const auto ref = trace_rays(*brute, rays, TraceOptions{1, false, false});
       const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
@@ -86,7 +89,7 @@ TEST(Octree, RaysAlongCentrePlanesAgreeWithBruteForce) {
 /// whose box the ray crosses over an interval of positive length (computed in double).
 TEST(Octree, RevellesVisitsLeavesFrontToBackAndMissesNone) {
   const auto scene = make_scene("soup:n=1500");
-  const Octree tree(scene, octree_config(""));
+  const Octree tree(scene, octree_config("c_trav=8"));  // a deep tree: many leaves
   const Bounds3f root = tree.data().bounds;
   std::vector<std::pair<Bounds3f, std::uint32_t>> leaves;  // box, node index: the stored (non-empty) leaves
   {
@@ -152,9 +155,9 @@ TEST(Octree, RevellesVisitsLeavesFrontToBackAndMissesNone) {
 /// two centre planes of every ancestor at once), and diagonal rays through node centres
 /// (through the corners of eight children), against the exact oracle.
 TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
-  for (const std::string spec : {"soup:n=800", "walls:n=6,angle=30"}) {
+  for (const std::string spec : {"soup:n=800", "walls:n=6,angle=30", "grass:blades=150"}) {
     const auto scene = make_scene(spec);
-    const Octree probe(scene, octree_config(""));
+    const Octree probe(scene, octree_config("c_trav=8"));  // a deep tree: many node centres
     std::vector<Ray> rays;
     std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0, probe.data().bounds}};
     while (!todo.empty() && rays.size() < 6000) {
@@ -186,7 +189,9 @@ TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
     const auto ref = trace_rays(*oracle, rays, TraceOptions{1, false, false});
     const auto ref_o = trace_rays(*oracle, rays, TraceOptions{1, false, true});
     EXPECT_GT(ref.hit_count, 0u);
-    for (const std::string accel_spec : {"octree", "octree:clip=none,mailbox=on", "octree:traversal=kd"}) {
+    for (const std::string accel_spec :
+         {"octree:c_trav=8", "octree:c_trav=8,clip=none,mailbox=on", "octree:c_trav=8,traversal=kd",
+          "octree:c_trav=8,traversal=revelles"}) {
       const auto accel = make_accelerator(accel_spec, scene);
       const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
       EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, diag).mismatches, 0u) << accel_spec << " on " << spec;
@@ -194,6 +199,35 @@ TEST(Octree, RevellesRaysThroughNodeCentresAgreeWithExactOracle) {
       EXPECT_EQ(compare_occlusion(got_o.blocked, ref_o.blocked).mismatches, 0u) << accel_spec << " on " << spec;
     }
   }
+}
+
+/// A flat scene's nodes split along their long axes only (octree_split_axes): the root of a
+/// lawn is not split along its thin axis, no node stores a child that its box does not have,
+/// and the deep nodes, whose boxes have become near cubes, split eight ways.
+TEST(Octree, FlatNodesSplitAlongTheirLongAxesOnly) {
+  const auto scene = make_scene("grass:blades=400");
+  const Octree tree(scene, octree_config("c_trav=2"));
+  const Bounds3f root = tree.data().bounds;
+  const Vec3f ext = root.diagonal();
+  int thin = 0;
+  for (int a = 1; a < 3; ++a)
+    if (ext[a] < ext[thin]) thin = a;
+  ASSERT_LT(ext[thin], 0.25f * max_component(ext)) << "the lawn is not flat";
+  EXPECT_EQ(octree_split_axes(root) & (1u << thin), 0u);
+  bool eight_way = false;
+  std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0, root}};
+  while (!todo.empty()) {
+    const auto [n, box] = todo.back();
+    todo.pop_back();
+    const OctNode& node = tree.data().nodes[n];
+    if (node.is_leaf()) continue;
+    eight_way = eight_way || octree_split_axes(box) == 7u;
+    for (unsigned i = 0; i < 8; ++i) {
+      EXPECT_TRUE(!node.has_child(i) || octree_child_exists(box, i));
+      if (node.has_child(i)) todo.push_back({node.child(i), octree_child_box(box, i)});
+    }
+  }
+  EXPECT_TRUE(eight_way);
 }
 
 TEST(Octree, CostTerminationAndDepthLimit) {

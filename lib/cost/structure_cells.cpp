@@ -77,7 +77,8 @@ void walk_octree(const Octree& tree, const Visit& visit) {
     }
     if (!visit(box_cell(it.box, it.depth))) return;
     for (unsigned i = 0; i < 8; ++i)
-      if (n.has_child(i)) stack.push_back({n.child(i), octree_child_box(it.box, i), it.depth + 1});
+      if (!octree_child_exists(it.box, i)) continue;  // a flat box has four or two children
+      else if (n.has_child(i)) stack.push_back({n.child(i), octree_child_box(it.box, i), it.depth + 1});
       else visit(leaf_cell(octree_child_box(it.box, i), 0, it.depth + 1));  // an empty child is not stored
   });
 }

@@ -7,10 +7,14 @@
 namespace raylab {
 
 BspTree::BspTree(std::shared_ptr<const Scene> scene, const BspConfig& config)
-    : scene_(std::move(scene)), config_(config), data_(build_bsp(*scene_, config_)) {}
+    : scene_(std::move(scene)), config_(config), data_(build_bsp(*scene_, config_)) {
+  bsp_pack_leaves(*scene_, data_.nodes, data_.prims, packed_nodes_, packets_);
+}
 
 AccelStats BspTree::stats() const {
-  return {data_.nodes.size() * sizeof(BspNode) + data_.prims.size() * sizeof(std::uint32_t), data_.nodes.size(),
+  return {(data_.nodes.size() + packed_nodes_.size()) * sizeof(BspNode) + data_.prims.size() * sizeof(std::uint32_t) +
+              packets_.size() * sizeof(TrianglePacket),
+          data_.nodes.size(),
           data_.sah_cost};
 }
 

@@ -22,7 +22,7 @@ class BspTree final : public AggregateBase<BspTree> {
 
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
-    const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    const BspTreeView view = traversal_view();
     const bool found = config_.kernel == KernelChoice::certified
                            ? bsp_traverse<CertifiedKernel, false>(view, ray, hit, counters)
                            : bsp_traverse<WatertightKernel, false>(view, ray, hit, counters);
@@ -33,15 +33,22 @@ class BspTree final : public AggregateBase<BspTree> {
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
     Hit hit;
-    const BspTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    const BspTreeView view = traversal_view();
     if (config_.kernel == KernelChoice::certified) return bsp_traverse<CertifiedKernel, true>(view, ray, hit, counters);
     return bsp_traverse<WatertightKernel, true>(view, closed_for_any_hit(ray), hit, counters);
   }
 
  private:
+  BspTreeView traversal_view() const {
+    if (packets_.empty()) return {data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    return {packed_nodes_.data(), nullptr, scene_.get(), data_.bounds, packets_.data()};
+  }
+
   std::shared_ptr<const Scene> scene_;
   BspConfig config_;
   BspTreeData data_;
+  std::vector<BspNode> packed_nodes_;    ///< data_.nodes with leaves indexing packets_ (bsp_pack_leaves)
+  std::vector<TrianglePacket> packets_;  ///< the leaves' triangles, 4-wide; empty when the scene has a sphere
 };
 
 AccelKind make_bsp_kind();

@@ -6,12 +6,16 @@
 /// plane (n·d within its error bound of 0 and the origin within its error bound of the plane)
 /// visits both children over its whole interval, and a ray exactly parallel to a plane visits the
 /// side of its origin only when the origin is surely off the plane. Axis-aligned planes are taken
-/// in float as the kd-tree's splits.
+/// in float as the kd-tree's splits. A leaf's triangles are tested 4-wide when the tree's leaves
+/// are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
 #include <cmath>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "accel/bsp/bsp_node.h"
 #include "accel/bsp/bsp_plane.h"
+#include "accel/common/packed_tree_leaves.h"
 #include "accel/kdtree/kdtree_traversal.h"
 
 namespace raylab {
@@ -21,7 +25,24 @@ struct BspTreeView {
   const std::uint32_t* prims;
   const Scene* scene;
   Bounds3f bounds;
+  /// The leaves packed 4-wide (bsp_pack_leaves), or null: a leaf's `index` then is the offset of
+  /// its primitive ids in `prims`.
+  const TrianglePacket* packets = nullptr;
 };
+
+/// The leaves of `nodes` packed 4-wide (pack_tree_leaves): `packed_nodes` is a copy of `nodes`
+/// whose leaves index `packets`; both stay empty when the scene holds a sphere.
+inline void bsp_pack_leaves(const Scene& scene, const std::vector<BspNode>& nodes,
+                            const std::vector<std::uint32_t>& prims, std::vector<BspNode>& packed_nodes,
+                            std::vector<TrianglePacket>& packets) {
+  pack_tree_leaves(
+      scene, nodes, prims,
+      [](BspNode& n) -> std::pair<std::uint32_t*, std::uint32_t> {
+        if (!n.is_leaf()) return {nullptr, 0u};
+        return {&n.index, n.count};
+      },
+      packed_nodes, packets);
+}
 
 template <class Kernel, bool kAnyHit, class Counters>
 bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
@@ -29,6 +50,8 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
   float tmin, tmax;
   if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
   auto ctx = Kernel::prepare(ray);
+  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
+  KdMailbox<false> no_mailbox;
   const Vec3d o(ray.org), d(ray.dir);
   struct Entry {
     std::uint32_t node;
@@ -99,13 +122,19 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
       }
       node = &tree.nodes[index];
     }
-    counters.leaf();
-    const std::uint32_t* p = tree.prims + node->index;
-    for (std::uint32_t i = 0; i < node->count; ++i)
-      if (intersect_scene_primitive<Kernel>(*tree.scene, p[i], ctx, hit, counters)) {
-        found = true;
-        if constexpr (kAnyHit) return true;
-      }
+    bool h;
+    if (tree.packets != nullptr) {
+      h = kd_test_packed_leaf<Kernel, kAnyHit, false>(tree.packets + node->index, node->count, ctx, packet_ray, hit,
+                                                      no_mailbox, counters);
+    } else {
+      counters.leaf();
+      h = kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node->index, node->count, ctx, hit, no_mailbox,
+                                              counters);
+    }
+    if (h) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
     do {
       if (top == 0) return found;
       --top;

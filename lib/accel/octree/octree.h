@@ -42,7 +42,12 @@ class Octree final : public AggregateBase<Octree> {
 
   template <class K, bool kAnyHit, class Counters>
   bool traverse(const Ray& ray, Hit& hit, Counters& counters) const {
-    const OctreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds};
+    const OctreeView view =
+        packets_.empty() ? OctreeView{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds}
+                         : OctreeView{packed_nodes_.data(), nullptr, scene_.get(), data_.bounds, packets_.data()};
+    if (config_.traversal == OctreeTraversal::stack)
+      return config_.mailbox ? octree_traverse_stack<K, kAnyHit, true>(view, ray, hit, counters)
+                             : octree_traverse_stack<K, kAnyHit, false>(view, ray, hit, counters);
     if (config_.traversal == OctreeTraversal::revelles)
       return config_.mailbox ? octree_traverse_revelles<K, kAnyHit, true>(view, ray, hit, counters)
                              : octree_traverse_revelles<K, kAnyHit, false>(view, ray, hit, counters);
@@ -53,6 +58,8 @@ class Octree final : public AggregateBase<Octree> {
   std::shared_ptr<const Scene> scene_;
   OctreeConfig config_;
   OctreeData data_;
+  std::vector<OctNode> packed_nodes_;    ///< data_.nodes with leaves indexing packets_ (octree_pack_leaves)
+  std::vector<TrianglePacket> packets_;  ///< the leaves' triangles, 4-wide; empty when the scene has a sphere
 };
 
 AccelKind make_octree_kind();

@@ -57,6 +57,7 @@ class OctreeBuilder {
     Bounds3f child_box[8];
     double cost = config_.cost.c_trav;
     for (unsigned i = 0; i < 8; ++i) {
+      if (!octree_child_exists(box, i)) continue;
       child_box[i] = octree_child_box(box, i);
       for (const PrimRef& r : refs)
         if (ref_meets_box(scene_, r, child_box[i], config_.clip))
@@ -77,6 +78,7 @@ class OctreeBuilder {
     out_.nodes[index] = {first, OctNode::kInterior | mask};
     out_.nodes.resize(out_.nodes.size() + static_cast<std::size_t>(std::popcount(mask)));
     for (unsigned i = 0; i < 8; ++i) {
+      if (!octree_child_exists(box, i)) continue;
       if (child_refs[i].empty()) {
         count_empty_leaf(child_box[i], depth + 1);
         continue;

@@ -40,7 +40,8 @@ void for_each_octree_leaf(const OctreeData& data, F&& f) {
       continue;
     }
     for (unsigned i = 0; i < 8; ++i)
-      if (n.has_child(i)) todo.push_back({n.child(i), octree_child_box(it.box, i)});
+      if (!octree_child_exists(it.box, i)) continue;
+      else if (n.has_child(i)) todo.push_back({n.child(i), octree_child_box(it.box, i)});
       else f(octree_child_box(it.box, i), 0u, 0u);
   }
 }

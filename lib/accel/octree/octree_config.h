@@ -7,6 +7,7 @@
 namespace raylab {
 
 enum class OctreeTraversal {
+  stack,     ///< iterative, explicit stack, crossings ordered per node (octree_traverse_stack)
   revelles,  ///< Revelles, Ureña and Lastra 2000: parametric, first-node and next-node tables, mirroring
   kd,        ///< the three centre planes of a node taken as three kd-tree splits
 };
@@ -15,16 +16,19 @@ struct OctreeConfig {
   ClipMode clip = ClipMode::exact;  ///< placement and clipping as in the kd-tree (split_clipping.h)
   /// A node is split at its centre when C_trav + Σ SA(child)/SA·leaf(N(child)) < leaf(N) (SahCost::leaf),
   /// the kd-tree's SAH applied to the eight children (no empty-space bonus). C_isect as the
-  /// kd-tree's, C_trav = 8: an interior visit of the Revelles walk costs about 5× a triangle test
-  /// (the fitted cost model, data/cost/default_model.json: 58 ns per node against 11 ns per test),
-  /// not the kd-tree's 1:1.5; with C_trav = 1 the octree of a 16k-triangle bunny had 211,360
-  /// nodes and traced 0.43× the kd-tree's throughput, with 8 about 20,000 nodes and 0.5×.
-  SahCost cost{8.0};
+  /// kd-tree's, C_trav = 48, measured: with leaves tested 4-wide (octree_pack_leaves) and the
+  /// stack traversal, exp_spatial quick (bunny 16k, dragon, stadium, walls, grass 10k; primary
+  /// rays) gave the geometric mean throughput 0.57x the kd-tree's at C_trav 8, 0.77x at 24 and
+  /// 32, 0.85x at 48 and 64, 0.81x at 96 (diffuse rays: 0.74x at 24, 0.79x at 32, 0.81x at 48).
+  /// A deeper tree visits fewer triangles but more nodes, each a dependent load into a
+  /// structure several times the kd-tree's size (references are copied into 40-byte packet
+  /// lanes), and a leaf of up to 4 triangles costs one packet test whatever its count.
+  SahCost cost{48.0};
   /// Safety depth limit; 0 means 3 + ceil(log8 N), at most 20.
   int max_depth = 0;
   /// Remember the last primitives tested by a ray and skip repeats.
   bool mailbox = false;
-  OctreeTraversal traversal = OctreeTraversal::revelles;
+  OctreeTraversal traversal = OctreeTraversal::stack;
   KernelChoice kernel = KernelChoice::watertight;
 };
 

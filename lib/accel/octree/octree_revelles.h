@@ -81,8 +81,14 @@ class OctreeRevellesWalk {
     if (node.is_leaf())
       return leaf_(index, box, std::max(std::max(t0[0], t0[1]), t0[2]), std::min(std::min(t1[0], t1[1]), t1[2]));
     counters_.node();
+    // An axis that is not split (octree_split_axes) keeps the real lower child: the mirrored bit
+    // is fixed at the mirror's, by a centre plane at -inf (crossed before entry) or +inf (never).
     float tm[3];
-    for (int a = 0; a < 3; ++a) tm[a] = plane_t(octree_mid(box, a), a, -std::numeric_limits<float>::infinity());
+    const unsigned split = octree_split_axes(box);
+    for (int a = 0; a < 3; ++a)
+      tm[a] = split & (1u << a) ? plane_t(octree_mid(box, a), a, -std::numeric_limits<float>::infinity())
+              : mask_ & (1u << a) ? -std::numeric_limits<float>::infinity()
+                                  : std::numeric_limits<float>::infinity();
 
     // First child (Table 1): the entry plane is the axis of max t0; bit a is set where the ray
     // has crossed the centre plane a before entering, left open where that is undecided.
@@ -122,8 +128,9 @@ class OctreeRevellesWalk {
       if (in_lo <= out_hi && out_hi >= tmin_) {
         float ct0[3], ct1[3];
         for (int a = 0; a < 3; ++a) {
-          ct0[a] = c & (1u << a) ? tm[a] : t0[a];
-          ct1[a] = c & (1u << a) ? t1[a] : tm[a];
+          const bool is_split = split & (1u << a);
+          ct0[a] = c & (1u << a) && is_split ? tm[a] : t0[a];
+          ct1[a] = c & (1u << a) || !is_split ? t1[a] : tm[a];
         }
         const unsigned child = c ^ mask_;
         if (node.has_child(child) && visit(node.child(child), octree_child_box(box, child), ct0, ct1)) return true;
