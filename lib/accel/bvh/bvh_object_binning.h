@@ -40,7 +40,7 @@ struct BvhRangeBounds {
   __m128 chi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
 
   void extend(const BvhBuildRef& r) {
-    const __m128 l = _mm_load_ps(r.lo), h = _mm_load_ps(r.hi), c = _mm_add_ps(l, h);
+    const __m128 l = bvh_ref_lo(r.lo), h = _mm_load_ps(r.hi), c = _mm_add_ps(l, h);
     lo = _mm_min_ps(lo, l);
     hi = _mm_max_ps(hi, h);
     clo = _mm_min_ps(clo, c);
@@ -91,7 +91,7 @@ struct BvhBinMapping {
   }
   /// Bin indices of `r` on the three axes (lane 3 unused).
   __m128i bin(const BvhBuildRef& r) const {
-    const __m128 c = _mm_add_ps(_mm_load_ps(r.lo), _mm_load_ps(r.hi));
+    const __m128 c = _mm_add_ps(bvh_ref_lo(r.lo), _mm_load_ps(r.hi));
     __m128 f = _mm_mul_ps(_mm_sub_ps(c, origin), scale);
     f = _mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), _mm_set1_ps(static_cast<float>(bins - 1)));
     return _mm_cvttps_epi32(f);
@@ -138,40 +138,19 @@ struct BvhObjectBins {
         count[a][b] = 0;
       }
   }
-  /// Bins refs[0, n). Consecutive references of a coherent mesh mostly fall into the same bin, so
-  /// updating one bin set would chain every update through a store and a load of the same bin;
-  /// from kSplitBinningMin references on, even and odd references go to two bin sets in the same
-  /// loop (two independent chains), merged at the end.
   void add(const BvhBuildRef* refs, std::size_t n, const BvhBinMapping& map) {
-    if (n < kSplitBinningMin) {
-      for (std::size_t i = 0; i < n; ++i) add_one(refs[i], map);
-      return;
-    }
-    BvhObjectBins odd;
-    odd.reset(bins);
-    std::size_t i = 0;
-    for (; i + 1 < n; i += 2) {
-      add_one(refs[i], map);
-      odd.add_one(refs[i + 1], map);
-    }
-    if (i < n) add_one(refs[i], map);
-    merge(odd);
-  }
-
-  static constexpr std::size_t kSplitBinningMin = 64;
-
-  void add_one(const BvhBuildRef& r, const BvhBinMapping& map) {
-    const __m128 l = _mm_load_ps(r.lo), h = _mm_load_ps(r.hi);
-    alignas(16) int b[4];
-    _mm_store_si128(reinterpret_cast<__m128i*>(b), map.bin(r));
-    for (int a = 0; a < 3; ++a) {
-      Bin& bin = box[a][b[a]];
-      bin.lo = _mm_min_ps(bin.lo, l);
-      bin.hi = _mm_max_ps(bin.hi, h);
-      ++count[a][b[a]];
+    for (std::size_t i = 0; i < n; ++i) {
+      const __m128 l = bvh_ref_lo(refs[i].lo), h = _mm_load_ps(refs[i].hi);
+      alignas(16) int b[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(b), map.bin(refs[i]));
+      for (int a = 0; a < 3; ++a) {
+        Bin& bin = box[a][b[a]];
+        bin.lo = _mm_min_ps(bin.lo, l);
+        bin.hi = _mm_max_ps(bin.hi, h);
+        ++count[a][b[a]];
+      }
     }
   }
-
   void merge(const BvhObjectBins& o) {
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < bins; ++b) {
@@ -256,7 +235,7 @@ inline std::size_t bvh_partition_object(BvhBuildRef* refs, std::size_t n, const 
   float* const base = reinterpret_cast<float*>(refs);
   std::size_t m = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const __m128 lo = _mm_load_ps(base + 8 * i), hi = _mm_load_ps(base + 8 * i + 4);
+    const __m128 raw_lo = _mm_load_ps(base + 8 * i), lo = bvh_ref_lo(base + 8 * i), hi = _mm_load_ps(base + 8 * i + 4);
     const bool goes_left = map.bin(refs[i], axis, origin, scale) < split_bin;
     const __m128 mask = _mm_castsi128_ps(_mm_set1_epi32(-static_cast<int>(goes_left)));
     const __m128 c = _mm_add_ps(lo, hi);
@@ -270,7 +249,7 @@ inline std::size_t bvh_partition_object(BvhBuildRef* refs, std::size_t n, const 
     r.chi = _mm_max_ps(r.chi, _mm_blendv_ps(c, ninf, mask));
     _mm_store_ps(base + 8 * i, _mm_load_ps(base + 8 * m));
     _mm_store_ps(base + 8 * i + 4, _mm_load_ps(base + 8 * m + 4));
-    _mm_store_ps(base + 8 * m, lo);
+    _mm_store_ps(base + 8 * m, raw_lo);
     _mm_store_ps(base + 8 * m + 4, hi);
     m += goes_left;
   }

@@ -236,7 +236,7 @@ class SpatialBuilder {
       return _mm_cvttps_epi32(f);
     };
     for (std::size_t i = 0; i < n; ++i) {
-      const __m128 l = _mm_load_ps(refs[i].lo), h = _mm_load_ps(refs[i].hi);
+      const __m128 l = bvh_ref_lo(refs[i].lo), h = _mm_load_ps(refs[i].hi);
       alignas(16) int first[4], last[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(first), bins_of(l));
       _mm_store_si128(reinterpret_cast<__m128i*>(last), bins_of(h));
