@@ -100,10 +100,6 @@ class BinnedSahBuilder {
   const BvhConfig& config_;
 };
 
-}  // namespace
-
-namespace {
-
 /// The binned SAH tree over n references, reference i with the box box_of(i).
 template <class BoxOf>
 Bvh2 binned_sah(std::size_t n, BoxOf&& box_of, const BvhConfig& config) {

@@ -103,10 +103,6 @@ class MidpointMedianBuilder {
   std::vector<Bvh2Node> nodes_;
 };
 
-}  // namespace
-
-namespace {
-
 void check_reference_count(std::size_t n) {
   if (n >= std::numeric_limits<std::uint32_t>::max()) throw std::length_error("build_bvh: more than 2^32 - 1 primitives");
 }

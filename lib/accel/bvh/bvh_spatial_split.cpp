@@ -159,10 +159,10 @@ class SpatialBuilder {
     return c;
   }
 
-  /// A box in two SSE registers, lane 3 zero (empty: some lo > hi).
+  /// A box in two SSE registers, lane 3 zero; empty as Bounds3f::empty (not lo <= hi on some axis).
   struct SseBox {
     __m128 lo, hi;
-    bool empty() const { return (_mm_movemask_ps(_mm_cmpgt_ps(lo, hi)) & 7) != 0; }
+    bool empty() const { return (_mm_movemask_ps(_mm_cmpnle_ps(lo, hi)) & 7) != 0; }
   };
 
   /// The parts of a primitive (its corners) inside `box` on either side of the plane
