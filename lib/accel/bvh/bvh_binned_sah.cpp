@@ -15,6 +15,7 @@
 
 #include <memory>
 
+#include "accel/bvh/bvh_build_memory.h"
 #include "accel/bvh/bvh_builders.h"
 #include "accel/bvh/bvh_object_binning.h"
 #include "accel/bvh/bvh_subtree.h"
@@ -99,12 +100,12 @@ class BinnedSahBuilder {
   const BvhConfig& config_;
 };
 
-}  // namespace
-
-Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
-  const std::size_t n = boxes.size();
+/// The binned SAH tree over n references, reference i with the box box_of(i).
+template <class BoxOf>
+Bvh2 binned_sah(std::size_t n, BoxOf&& box_of, const BvhConfig& config) {
   if (n == 0) return Bvh2{};
   std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[n]);
+  bvh_advise_huge_pages(refs.get(), n * sizeof(BvhBuildRef));
   BvhSubtree root;
   tbb::task_arena arena(resolve_thread_count(config.threads));
   arena.execute([&] {
@@ -112,7 +113,7 @@ Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& c
         tbb::blocked_range<std::size_t>(0, n, kBinChunk), BvhRangeBounds(),
         [&](const tbb::blocked_range<std::size_t>& r, BvhRangeBounds b) {
           for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            refs[i] = BvhBuildRef::make(bvh_build_box(boxes[i]), static_cast<std::uint32_t>(i));
+            refs[i] = BvhBuildRef::make(bvh_build_box(box_of(i)), static_cast<std::uint32_t>(i));
             b.extend(refs[i]);
           }
           return b;
@@ -124,6 +125,17 @@ Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& c
     BinnedSahBuilder(refs.get(), config).build(root, 0, 0, n, bounds, 0);
   });
   return bvh_concatenate(root, n, [&](std::size_t k) { return refs[k].id; });
+}
+
+}  // namespace
+
+Bvh2 build_bvh_binned_sah(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
+  return binned_sah(boxes.size(), [&boxes](std::size_t i) { return boxes[i]; }, config);
+}
+
+Bvh2 build_bvh_binned_sah(const Scene& scene, const BvhConfig& config) {
+  return binned_sah(scene.primitive_count(),
+                    [&scene](std::size_t i) { return scene.primitive_bounds(static_cast<unsigned>(i)); }, config);
 }
 
 }  // namespace raylab

@@ -103,11 +103,14 @@ class MidpointMedianBuilder {
   std::vector<Bvh2Node> nodes_;
 };
 
+void check_reference_count(std::size_t n) {
+  if (n >= std::numeric_limits<std::uint32_t>::max()) throw std::length_error("build_bvh: more than 2^32 - 1 primitives");
+}
+
 }  // namespace
 
 Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& config) {
-  if (boxes.size() >= std::numeric_limits<std::uint32_t>::max())
-    throw std::length_error("build_bvh_over_boxes: more than 2^32 - 1 boxes");
+  check_reference_count(boxes.size());
   switch (config.builder) {
     case BvhBuilder::midpoint:
     case BvhBuilder::median: return MidpointMedianBuilder(boxes, config).build();
@@ -120,6 +123,10 @@ Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& c
 
 Bvh2 build_bvh(const Scene& scene, const BvhConfig& config) {
   if (config.builder == BvhBuilder::spatial) return build_bvh_spatial(scene, config);
+  if (config.builder == BvhBuilder::binned) {
+    check_reference_count(scene.primitive_count());
+    return build_bvh_binned_sah(scene, config);
+  }
   std::vector<Bounds3f> boxes(scene.primitive_count());
   for (std::size_t i = 0; i < boxes.size(); ++i) boxes[i] = scene.primitive_bounds(static_cast<unsigned>(i));
   return build_bvh_over_boxes(boxes, config);

@@ -24,6 +24,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "accel/bvh/bvh_build_memory.h"
 #include "accel/bvh/bvh_builders.h"
 #include "accel/bvh/bvh_object_binning.h"
 #include "accel/bvh/bvh_subtree.h"
@@ -134,14 +135,14 @@ class SpatialBuilder {
     return clipped_triangle_bounds(v[t[0]], v[t[1]], v[t[2]], part);
   }
 
-  /// The primitive's corners (a sphere: the two corners of its box, which split_estimate then
-  /// treats as the segment between them).
+  /// The primitive's corners, (x, y, z, 0) each; a sphere has none (count 0), and split_estimate
+  /// then cuts its box.
   struct Corners {
-    float p[3][3];
+    alignas(16) float p[3][4];
     int count;
   };
   Corners corners(const BvhBuildRef& ref) const {
-    Corners c{};
+    Corners c;
     if (scene_.is_sphere(ref.id)) {
       c.count = 0;
       return c;
@@ -152,54 +153,60 @@ class SpatialBuilder {
       c.p[i][0] = v.x;
       c.p[i][1] = v.y;
       c.p[i][2] = v.z;
+      c.p[i][3] = 0.0f;
     }
     c.count = 3;
     return c;
   }
 
+  /// A box in two SSE registers, lane 3 zero; empty as Bounds3f::empty (not lo <= hi on some axis).
+  struct SseBox {
+    __m128 lo, hi;
+    bool empty() const { return (_mm_movemask_ps(_mm_cmpnle_ps(lo, hi)) & 7) != 0; }
+  };
+
   /// The parts of a primitive (its corners) inside `box` on either side of the plane
   /// x[axis] = pos, for estimating spatial bins (Stich et al. §4.2: split the triangle's edges
   /// at the plane, bound the pieces, intersect with the reference's box). Float arithmetic: an
   /// estimate, not a conservative bound; the applied split clips conservatively (clip()).
-  static void split_estimate(const Corners& c, const Bounds3f& box, int axis, float pos, Bounds3f& left,
-                             Bounds3f& right) {
+  /// `axis_mask` has all bits set in lane `axis` only.
+  static void split_estimate(const Corners& c, const SseBox& box, int axis, __m128 axis_mask, float pos, SseBox& left,
+                             SseBox& right) {
+    const __m128 at = _mm_set1_ps(pos);
     if (c.count == 0) {  // a sphere: its box, cut
       left = right = box;
     } else {
-      float llo[3], lhi[3], rlo[3], rhi[3];
-      for (int k = 0; k < 3; ++k) {
-        llo[k] = rlo[k] = std::numeric_limits<float>::infinity();
-        lhi[k] = rhi[k] = -std::numeric_limits<float>::infinity();
-      }
-      auto add = [](float* lo, float* hi, const float* p) {
-        for (int k = 0; k < 3; ++k) {
-          lo[k] = std::min(lo[k], p[k]);
-          hi[k] = std::max(hi[k], p[k]);
-        }
-      };
+      const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), ninf = _mm_sub_ps(_mm_setzero_ps(), inf);
+      __m128 llo = inf, lhi = ninf, rlo = inf, rhi = ninf;
       for (int e = 0; e < 3; ++e) {
-        const float* a = c.p[e];
-        const float* b = c.p[e == 2 ? 0 : e + 1];
-        const float da = a[axis] - pos, db = b[axis] - pos;
-        if (da <= 0.0f) add(llo, lhi, a);
-        if (da >= 0.0f) add(rlo, rhi, a);
+        const float* pa = c.p[e];
+        const float* pb = c.p[e == 2 ? 0 : e + 1];
+        const __m128 a = _mm_load_ps(pa);
+        const float da = pa[axis] - pos, db = pb[axis] - pos;
+        if (da <= 0.0f) {
+          llo = _mm_min_ps(llo, a);
+          lhi = _mm_max_ps(lhi, a);
+        }
+        if (da >= 0.0f) {
+          rlo = _mm_min_ps(rlo, a);
+          rhi = _mm_max_ps(rhi, a);
+        }
         if ((da < 0.0f && db > 0.0f) || (da > 0.0f && db < 0.0f)) {
-          const float t = da / (da - db);
-          float p[3] = {a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t};
-          p[axis] = pos;
-          add(llo, lhi, p);
-          add(rlo, rhi, p);
+          const __m128 t = _mm_set1_ps(da / (da - db));
+          __m128 q = _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(_mm_load_ps(pb), a), t));
+          q = _mm_blendv_ps(q, at, axis_mask);
+          llo = _mm_min_ps(llo, q);
+          lhi = _mm_max_ps(lhi, q);
+          rlo = _mm_min_ps(rlo, q);
+          rhi = _mm_max_ps(rhi, q);
         }
       }
-      for (int k = 0; k < 3; ++k) {  // empty stays empty: lo = +inf, hi = -inf
-        left.lo[k] = std::max(llo[k], box.lo[k]);
-        left.hi[k] = std::min(lhi[k], box.hi[k]);
-        right.lo[k] = std::max(rlo[k], box.lo[k]);
-        right.hi[k] = std::min(rhi[k], box.hi[k]);
-      }
+      // Empty stays empty: lo = +inf, hi = -inf.
+      left = {_mm_max_ps(llo, box.lo), _mm_min_ps(lhi, box.hi)};
+      right = {_mm_max_ps(rlo, box.lo), _mm_min_ps(rhi, box.hi)};
     }
-    left.hi[axis] = std::min(left.hi[axis], pos);
-    right.lo[axis] = std::max(right.lo[axis], pos);
+    left.hi = _mm_blendv_ps(left.hi, _mm_min_ps(left.hi, at), axis_mask);
+    right.lo = _mm_blendv_ps(right.lo, _mm_max_ps(right.lo, at), axis_mask);
   }
 
   /// Binned spatial split (Stich et al. §4.2): spatial_bins(n) equal slabs of the node box per
@@ -236,7 +243,7 @@ class SpatialBuilder {
       return _mm_cvttps_epi32(f);
     };
     for (std::size_t i = 0; i < n; ++i) {
-      const __m128 l = _mm_load_ps(refs[i].lo), h = _mm_load_ps(refs[i].hi);
+      const __m128 l = bvh_ref_lo(refs[i].lo), h = _mm_load_ps(refs[i].hi);
       alignas(16) int first[4], last[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(first), bins_of(l));
       _mm_store_si128(reinterpret_cast<__m128i*>(last), bins_of(h));
@@ -256,18 +263,15 @@ class SpatialBuilder {
           c = corners(refs[i]);
           corners_loaded = true;
         }
-        Bounds3f rest = refs[i].box();  // chop the reference into the bins it spans
+        SseBox rest{l, h};  // chop the reference into the bins it spans
+        const __m128 axis_mask = _mm_castsi128_ps(_mm_setr_epi32(-(a == 0), -(a == 1), -(a == 2), 0));
         for (int k = first[a]; k <= last[a]; ++k) {
-          Bounds3f part;
-          if (k < last[a]) {
-            split_estimate(c, rest, a, plane(a, k + 1), part, rest);
-          } else {
-            part = rest;
-          }
+          SseBox part = rest;
+          if (k < last[a]) split_estimate(c, SseBox(rest), a, axis_mask, plane(a, k + 1), part, rest);
           if (part.empty()) continue;
           Bin& b = bin[a][k];
-          b.lo = _mm_min_ps(b.lo, _mm_setr_ps(part.lo.x, part.lo.y, part.lo.z, 0.0f));
-          b.hi = _mm_max_ps(b.hi, _mm_setr_ps(part.hi.x, part.hi.y, part.hi.z, 0.0f));
+          b.lo = _mm_min_ps(b.lo, part.lo);
+          b.hi = _mm_max_ps(b.hi, part.hi);
         }
       }
     }
@@ -409,6 +413,7 @@ Bvh2 build_bvh_spatial(const Scene& scene, const BvhConfig& config) {
     throw std::length_error("build_bvh: SBVH reference capacity exceeds 2^32 - 1");
   // Uninitialised: the pages past N are touched only where spatial splits use them.
   std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[capacity]);
+  bvh_advise_huge_pages(refs.get(), capacity * sizeof(BvhBuildRef));
   BvhRangeBounds bounds;
   for (std::size_t i = 0; i < n; ++i) {
     refs[i] = BvhBuildRef::make(bvh_build_box(scene.primitive_bounds(static_cast<unsigned>(i))),
