@@ -35,7 +35,7 @@ const std::vector<std::string> kScenes = {"cgal:armadillo",
                                           "stadium:object=(sphere:n=5000),ratio=1000",
                                           "walls:n=400,angle=30",
                                           "grass:blades=100000",
-                                          "room:of=cgal:armadillo"};
+                                          "room:of=cgal:armadillo,window=0"};
 
 std::shared_ptr<const Scene> scene_for(const std::string& spec) {
   static std::map<std::string, std::shared_ptr<const Scene>> cache;
