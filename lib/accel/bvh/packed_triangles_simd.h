@@ -36,12 +36,12 @@
 
 namespace raylab {
 
-/// Vertex k, axis a of the `W` lanes of the W / kPacketWidth consecutive packets from `p`.
-template <int W>
-[[gnu::always_inline]] inline simd::Float<W> load_lanes(const TrianglePacket* p, int k, int a) {
-  static_assert(W == kPacketWidth || W == 2 * kPacketWidth);
-  if constexpr (W == kPacketWidth) return simd::Float<W>::load(p->v[k][a]);
-  else return simd::Float<W>::load_halves(p[0].v[k][a], p[1].v[k][a]);
+/// Vertex k, axis a of the kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`.
+template <int kLanes>
+[[gnu::always_inline]] inline simd::Float<kLanes> load_lanes(const TrianglePacket* p, int k, int a) {
+  static_assert(kLanes == kPacketWidth || kLanes == 2 * kPacketWidth);
+  if constexpr (kLanes == kPacketWidth) return simd::Float<kLanes>::load(p->v[k][a]);
+  else return simd::Float<kLanes>::load_halves(p[0].v[k][a], p[1].v[k][a]);
 }
 
 /// The lane of `ok` (nonempty) with the smallest t, the lowest among equal ones; any lane of
@@ -76,25 +76,25 @@ struct PacketKernel<WatertightKernel> {
     return intersect_lanes<kAnyHit, kPacketWidth>(c, r, &p, hit);
   }
 
-  /// The `W` lanes of the W / kPacketWidth consecutive packets from `p`, numbered in order.
-  template <bool kAnyHit, int W>
+  /// The kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`, in order.
+  template <bool kAnyHit, int kLanes>
   static int intersect_lanes(WatertightKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
-    using F = simd::Float<W>;
+    using F = simd::Float<kLanes>;
     const F ox = F::broadcast(r.ox), oy = F::broadcast(r.oy), oz = F::broadcast(r.oz);
     const F sx = F::broadcast(r.sx), sy = F::broadcast(r.sy), sz = F::broadcast(r.sz);
     // a, b, d of the scalar kernel: the vertices relative to the origin, in sheared axes.
-    const F az0 = load_lanes<W>(p, 0, c.kz) - oz, bz0 = load_lanes<W>(p, 1, c.kz) - oz, cz0 = load_lanes<W>(p, 2, c.kz) - oz;
-    const F ax = (load_lanes<W>(p, 0, c.kx) - ox) - sx * az0, ay = (load_lanes<W>(p, 0, c.ky) - oy) - sy * az0;
-    const F bx = (load_lanes<W>(p, 1, c.kx) - ox) - sx * bz0, by = (load_lanes<W>(p, 1, c.ky) - oy) - sy * bz0;
-    const F cx = (load_lanes<W>(p, 2, c.kx) - ox) - sx * cz0, cy = (load_lanes<W>(p, 2, c.ky) - oy) - sy * cz0;
+    const F az0 = load_lanes<kLanes>(p, 0, c.kz) - oz, bz0 = load_lanes<kLanes>(p, 1, c.kz) - oz, cz0 = load_lanes<kLanes>(p, 2, c.kz) - oz;
+    const F ax = (load_lanes<kLanes>(p, 0, c.kx) - ox) - sx * az0, ay = (load_lanes<kLanes>(p, 0, c.ky) - oy) - sy * az0;
+    const F bx = (load_lanes<kLanes>(p, 1, c.kx) - ox) - sx * bz0, by = (load_lanes<kLanes>(p, 1, c.ky) - oy) - sy * bz0;
+    const F cx = (load_lanes<kLanes>(p, 2, c.kx) - ox) - sx * cz0, cy = (load_lanes<kLanes>(p, 2, c.ky) - oy) - sy * cz0;
     F U = cx * by - cy * bx;
     F V = ax * cy - ay * cx;
-    F W_ = bx * ay - by * ax;
+    F W = bx * ay - by * ax;
     const F zero = F::broadcast(0.0f);
-    if (const unsigned fallback = (U == zero) | (V == zero) | (W_ == zero)) {
-      alignas(32) float u[W], v[W], w[W];
-      alignas(32) float lax[W], lay[W], lbx[W], lby[W], lcx[W], lcy[W];
-      U.store(u), V.store(v), W_.store(w);
+    if (const unsigned fallback = (U == zero) | (V == zero) | (W == zero)) {
+      alignas(32) float u[kLanes], v[kLanes], w[kLanes];
+      alignas(32) float lax[kLanes], lay[kLanes], lbx[kLanes], lby[kLanes], lcx[kLanes], lcy[kLanes];
+      U.store(u), V.store(v), W.store(w);
       ax.store(lax), ay.store(lay), bx.store(lbx), by.store(lby), cx.store(lcx), cy.store(lcy);
       for (unsigned m = fallback; m != 0; m &= m - 1) {
         const int i = std::countr_zero(m);
@@ -102,23 +102,23 @@ struct PacketKernel<WatertightKernel> {
         v[i] = static_cast<float>(double(lax[i]) * double(lcy[i]) - double(lay[i]) * double(lcx[i]));
         w[i] = static_cast<float>(double(lbx[i]) * double(lay[i]) - double(lby[i]) * double(lax[i]));
       }
-      U = F::load(u), V = F::load(v), W_ = F::load(w);
+      U = F::load(u), V = F::load(v), W = F::load(w);
     }
-    const unsigned mixed = ((U < zero) | (V < zero) | (W_ < zero)) & ((U > zero) | (V > zero) | (W_ > zero));
-    const F det = U + V + W_;
-    unsigned ok = ~mixed & ~(det == zero) & finite(det) & ((1u << W) - 1);
+    const unsigned mixed = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
+    const F det = U + V + W;
+    unsigned ok = ~mixed & ~(det == zero) & finite(det) & ((1u << kLanes) - 1);
     if (ok == 0) return -1;
-    const F T = U * (sz * az0) + V * (sz * bz0) + W_ * (sz * cz0);
+    const F T = U * (sz * az0) + V * (sz * bz0) + W * (sz * cz0);
     const F inv_det = F::broadcast(1.0f) / det;
     const F t = T * inv_det;
     ok &= (t >= F::broadcast(c.tmin)) & (t < F::broadcast(c.tmax));
     if (ok == 0) return -1;
-    alignas(32) float ts[W];
+    alignas(32) float ts[kLanes];
     t.store(ts);
     const int best = closest_lane<kAnyHit>(ok, ts);
-    alignas(32) float us[W], vs[W];
+    alignas(32) float us[kLanes], vs[kLanes];
     (V * inv_det).store(us);
-    (W_ * inv_det).store(vs);
+    (W * inv_det).store(vs);
     c.tmax = ts[best];
     hit = {ts[best], us[best], vs[best]};
     return best;
@@ -204,17 +204,17 @@ struct PacketKernel<MollerTrumboreKernel> {
     return intersect_lanes<kAnyHit, kPacketWidth>(c, r, &p, hit);
   }
 
-  /// The `W` lanes of the W / kPacketWidth consecutive packets from `p`, numbered in order.
-  template <bool kAnyHit, int W>
+  /// The kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`, in order.
+  template <bool kAnyHit, int kLanes>
   static int intersect_lanes(MollerTrumboreKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
-    using F = simd::Float<W>;
+    using F = simd::Float<kLanes>;
     F o[3], d[3], p0[3], e1[3], e2[3];
     for (int a = 0; a < 3; ++a) {
       o[a] = F::broadcast(r.o[a]);
       d[a] = F::broadcast(r.d[a]);
-      p0[a] = load_lanes<W>(p, 0, a);
-      e1[a] = load_lanes<W>(p, 1, a) - p0[a];
-      e2[a] = load_lanes<W>(p, 2, a) - p0[a];
+      p0[a] = load_lanes<kLanes>(p, 0, a);
+      e1[a] = load_lanes<kLanes>(p, 1, a) - p0[a];
+      e2[a] = load_lanes<kLanes>(p, 2, a) - p0[a];
     }
     const auto cross = [](const F* x, const F* y, F* out) {
       out[0] = fmsub(x[1], y[2], x[2] * y[1]);
@@ -229,7 +229,7 @@ struct PacketKernel<MollerTrumboreKernel> {
     cross(d, e2, pv);
     const F det = dot(e1, pv);
     const F zero = F::broadcast(0.0f);
-    unsigned ok = ~(det == zero) & finite(det) & ((1u << W) - 1);
+    unsigned ok = ~(det == zero) & finite(det) & ((1u << kLanes) - 1);
     if (ok == 0) return -1;
     const F sign = sign_bits(det), abs_det = abs(det);
     for (int a = 0; a < 3; ++a) tv[a] = o[a] - p0[a];
@@ -247,7 +247,7 @@ struct PacketKernel<MollerTrumboreKernel> {
     // before the current closest, and on [tmin, ...).
     ok &= (t >= F::broadcast(c.ray.tmin)) & (t < F::broadcast(c.tmax));
     if (ok == 0) return -1;
-    alignas(32) float ts[W], us[W], vs[W];
+    alignas(32) float ts[kLanes], us[kLanes], vs[kLanes];
     t.store(ts);
     const int best = closest_lane<kAnyHit>(ok, ts);
     u.store(us);
@@ -258,28 +258,28 @@ struct PacketKernel<MollerTrumboreKernel> {
   }
 };
 
-/// Offers the `lanes` filled lanes of the W / kPacketWidth consecutive packets from `packets` to
-/// PacketKernel<Kernel> (W = 2·kPacketWidth needs its intersect_lanes), counted as a scalar loop
+/// Offers the `lanes` filled lanes of the kLanes / kPacketWidth consecutive packets from `packets`
+/// to PacketKernel<Kernel> (kLanes = 2·kPacketWidth needs its intersect_lanes), counted as a scalar loop
 /// would count them (`lanes` tests, at most one hit). On a hit closer than ctx's closest,
 /// writes `hit` with the lane's scene primitive id and returns true.
-template <class Kernel, bool kAnyHit, int W = kPacketWidth, class Counters>
+template <class Kernel, bool kAnyHit, int kLanes = kPacketWidth, class Counters>
 inline bool intersect_triangle_packets(typename Kernel::Context& ctx, const typename PacketKernel<Kernel>::Ray& packet_ray,
                                        const TrianglePacket* packets, int lanes, Hit& hit, Counters& counters) {
   if constexpr (Counters::enabled)
     for (int i = lanes; i > 0; --i) counters.prim_test();
   TriangleHit th;
   int lane;
-  if constexpr (W == kPacketWidth)
+  if constexpr (kLanes == kPacketWidth)
     lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, *packets, th);
   else
-    lane = PacketKernel<Kernel>::template intersect_lanes<kAnyHit, W>(ctx, packet_ray, packets, th);
+    lane = PacketKernel<Kernel>::template intersect_lanes<kAnyHit, kLanes>(ctx, packet_ray, packets, th);
   if (lane < 0) return false;
   counters.prim_hit();
   set_scene_hit(hit, th, packets[lane / kPacketWidth].prim[lane % kPacketWidth]);
   return true;
 }
 
-/// One packet: intersect_triangle_packets with W = kPacketWidth.
+/// One packet: intersect_triangle_packets with kLanes = kPacketWidth.
 template <class Kernel, bool kAnyHit, class Counters>
 inline bool intersect_triangle_packet(typename Kernel::Context& ctx, const typename PacketKernel<Kernel>::Ray& packet_ray,
                                       const TrianglePacket& packet, int lanes, Hit& hit, Counters& counters) {
