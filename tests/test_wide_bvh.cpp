@@ -179,8 +179,9 @@ TEST(WideBvh, SimdBoxTestMatchesIntersectBox) {
   check_box_test<8>(rng);
 }
 
-/// A packet of up to four triangles, shared edges and vertices among them, and rays aimed at
-/// their vertices, edges and interiors from random origins.
+/// A packet of up to four triangles, or two packets tested as one 8-lane packet, shared edges
+/// and vertices among them, and rays aimed at their vertices, edges and interiors from random
+/// origins.
 TEST(WideBvh, PackedWatertightMatchesScalarBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> coord(-2.0f, 2.0f), unit(0.0f, 1.0f);
@@ -188,7 +189,7 @@ TEST(WideBvh, PackedWatertightMatchesScalarBitForBit) {
   std::vector<TrianglePacket> packets;
   int hits = 0;
   for (int trial = 0; trial < 60000; ++trial) {
-    const int n = 1 + trial % kPacketWidth;
+    const int n = 1 + trial % (2 * kPacketWidth);
     Scene scene;
     auto& m = scene.mesh;
     const Vec3f shared_a{coord(rng), coord(rng), coord(rng)}, shared_b{coord(rng), coord(rng), coord(rng)};
@@ -204,8 +205,13 @@ TEST(WideBvh, PackedWatertightMatchesScalarBitForBit) {
     std::vector<std::uint32_t> prims(n);
     for (int i = 0; i < n; ++i) prims[i] = static_cast<std::uint32_t>(i);
     packets.clear();
-    ASSERT_EQ(pack_leaf(scene, prims, packets), 1u);
-    const TrianglePacket& packet = packets[0];
+    const bool paired = n > kPacketWidth;
+    ASSERT_EQ(pack_leaf(scene, prims, packets), paired ? 2u : 1u);
+    const auto packed_intersect = [&]<bool kAnyHit>(WatertightKernel::Context& c, const PacketKernel<WatertightKernel>::Ray& r,
+                                                    TriangleHit& h) {
+      return paired ? PacketKernel<WatertightKernel>::intersect_lanes<kAnyHit, 2 * kPacketWidth>(c, r, packets.data(), h)
+                    : PacketKernel<WatertightKernel>::intersect<kAnyHit>(c, r, packets[0], h);
+    };
 
     const int t_index = std::uniform_int_distribution<int>(0, n - 1)(rng);
     const auto& tri = m.triangles[t_index];
@@ -241,19 +247,19 @@ TEST(WideBvh, PackedWatertightMatchesScalarBitForBit) {
     WatertightKernel::Context packed = WatertightKernel::prepare(ray);
     const PacketKernel<WatertightKernel>::Ray pr(packed);
     TriangleHit packed_hit;
-    const int lane = PacketKernel<WatertightKernel>::intersect<false>(packed, pr, packet, packed_hit);
+    const int lane = packed_intersect.template operator()<false>(packed, pr, packed_hit);
     ASSERT_EQ(lane, scalar_lane) << "trial " << trial;
     ASSERT_EQ(bits(packed.tmax), bits(scalar.tmax)) << "trial " << trial;
     if (lane >= 0) {
       ++hits;
-      EXPECT_EQ(packet.prim[lane], static_cast<std::uint32_t>(scalar_lane));
+      EXPECT_EQ(packets[lane / kPacketWidth].prim[lane % kPacketWidth], static_cast<std::uint32_t>(scalar_lane));
       ASSERT_EQ(bits(packed_hit.t), bits(scalar_hit.t));
       ASSERT_EQ(bits(packed_hit.u), bits(scalar_hit.u));
       ASSERT_EQ(bits(packed_hit.v), bits(scalar_hit.v));
       // Any-hit reports a hitting lane exactly when closest hit does.
       WatertightKernel::Context any = WatertightKernel::prepare(ray);
       TriangleHit any_hit;
-      EXPECT_GE(PacketKernel<WatertightKernel>::intersect<true>(any, pr, packet, any_hit), 0);
+      EXPECT_GE(packed_intersect.template operator()<true>(any, pr, any_hit), 0);
     }
   }
   EXPECT_GT(hits, 10000);

@@ -97,21 +97,8 @@ class Bvh final : public AggregateBase<Bvh> {
             packet_ray = typename PacketKernel<Kernel>::Ray(ctx);
             prepared = true;
           }
-          bool found = false;
-          for (const TrianglePacket* p = packets + first; p != packets + first + count; ++p) {
-            if (scene.is_sphere(p->prim[0])) {
-              for (int i = 0; i < kPacketWidth && p->prim[i] != kInvalidId; ++i)
-                if (intersect_scene_primitive<Kernel>(scene, p->prim[i], ctx, hit, counters)) {
-                  found = true;
-                  if constexpr (kAnyHit) return true;
-                }
-              continue;
-            }
-            if (intersect_triangle_packet<Kernel, kAnyHit>(ctx, packet_ray, *p, p->size(), hit, counters)) {
-              found = true;
-              if constexpr (kAnyHit) return true;
-            }
-          }
+          const bool found =
+              intersect_packed_leaf<Kernel, kAnyHit>(scene, ctx, packet_ray, packets + first, count, hit, counters);
           t = Kernel::closest(ctx);
           return found;
         });

@@ -3,7 +3,10 @@
 ///
 ///   PacketKernel<Kernel>::Ray pr(ctx);                       // once per ray
 ///   int lane = PacketKernel<Kernel>::intersect<kAnyHit>(ctx, pr, packet, hit);
+///   int lane = PacketKernel<Kernel>::intersect_lanes<kAnyHit, 8>(ctx, pr, &packets[i], hit);
 ///
+/// intersect_lanes<kAnyHit, 8> (watertight and Möller-Trumbore) tests two consecutive packets
+/// as one 8-lane packet (lane 4k + i is lane i of packet k), one AVX test where a leaf holds two.
 /// Contract: `intersect` returns the lane that the scalar Kernel, offered the packet's
 /// triangles in lane order, would have reported last (the closest hit strictly before
 /// ctx's current closest, the lowest lane among equal t), or -1; it updates ctx as the scalar
@@ -22,6 +25,8 @@
 ///    kernel": the reported lane is the last one that became the first hit.
 #include <bit>
 #include <cmath>
+#include <cstdint>
+#include <type_traits>
 
 #include "accel/bvh/packed_triangles.h"
 #include "accel/bvh/simd.h"
@@ -31,39 +36,64 @@
 
 namespace raylab {
 
+/// Vertex k, axis a of the kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`.
+template <int kLanes>
+[[gnu::always_inline]] inline simd::Float<kLanes> load_lanes(const TrianglePacket* p, int k, int a) {
+  static_assert(kLanes == kPacketWidth || kLanes == 2 * kPacketWidth);
+  if constexpr (kLanes == kPacketWidth) return simd::Float<kLanes>::load(p->v[k][a]);
+  else return simd::Float<kLanes>::load_halves(p[0].v[k][a], p[1].v[k][a]);
+}
+
+/// The lane of `ok` (nonempty) with the smallest t, the lowest among equal ones; any lane of
+/// `ok` with kAnyHit.
+template <bool kAnyHit>
+[[gnu::always_inline]] inline int closest_lane(unsigned ok, const float* ts) {
+  int best = std::countr_zero(ok);
+  if constexpr (!kAnyHit) {
+    for (unsigned m = ok & (ok - 1); m != 0; m &= m - 1) {
+      const int i = std::countr_zero(m);
+      if (ts[i] < ts[best]) best = i;
+    }
+  }
+  return best;
+}
+
 template <class Kernel>
 struct PacketKernel;
 
 template <>
 struct PacketKernel<WatertightKernel> {
-  using F = simd::Float<kPacketWidth>;
+  /// The context's origin and shear in its sheared axis order, broadcast at each test.
   struct Ray {
-    F ox, oy, oz, sx, sy, sz;
+    float ox, oy, oz, sx, sy, sz;
     Ray() = default;
     explicit Ray(const WatertightKernel::Context& c)
-        : ox(F::broadcast(c.org[c.kx])),
-          oy(F::broadcast(c.org[c.ky])),
-          oz(F::broadcast(c.org[c.kz])),
-          sx(F::broadcast(c.sx)),
-          sy(F::broadcast(c.sy)),
-          sz(F::broadcast(c.sz)) {}
+        : ox(c.org[c.kx]), oy(c.org[c.ky]), oz(c.org[c.kz]), sx(c.sx), sy(c.sy), sz(c.sz) {}
   };
 
   template <bool kAnyHit>
   static int intersect(WatertightKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
+    return intersect_lanes<kAnyHit, kPacketWidth>(c, r, &p, hit);
+  }
+
+  /// The kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`, in order.
+  template <bool kAnyHit, int kLanes>
+  static int intersect_lanes(WatertightKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
+    using F = simd::Float<kLanes>;
+    const F ox = F::broadcast(r.ox), oy = F::broadcast(r.oy), oz = F::broadcast(r.oz);
+    const F sx = F::broadcast(r.sx), sy = F::broadcast(r.sy), sz = F::broadcast(r.sz);
     // a, b, d of the scalar kernel: the vertices relative to the origin, in sheared axes.
-    const F az0 = F::load(p.v[0][c.kz]) - r.oz, bz0 = F::load(p.v[1][c.kz]) - r.oz, cz0 = F::load(p.v[2][c.kz]) - r.oz;
-    const F ax = (F::load(p.v[0][c.kx]) - r.ox) - r.sx * az0, ay = (F::load(p.v[0][c.ky]) - r.oy) - r.sy * az0;
-    const F bx = (F::load(p.v[1][c.kx]) - r.ox) - r.sx * bz0, by = (F::load(p.v[1][c.ky]) - r.oy) - r.sy * bz0;
-    const F cx = (F::load(p.v[2][c.kx]) - r.ox) - r.sx * cz0, cy = (F::load(p.v[2][c.ky]) - r.oy) - r.sy * cz0;
+    const F az0 = load_lanes<kLanes>(p, 0, c.kz) - oz, bz0 = load_lanes<kLanes>(p, 1, c.kz) - oz, cz0 = load_lanes<kLanes>(p, 2, c.kz) - oz;
+    const F ax = (load_lanes<kLanes>(p, 0, c.kx) - ox) - sx * az0, ay = (load_lanes<kLanes>(p, 0, c.ky) - oy) - sy * az0;
+    const F bx = (load_lanes<kLanes>(p, 1, c.kx) - ox) - sx * bz0, by = (load_lanes<kLanes>(p, 1, c.ky) - oy) - sy * bz0;
+    const F cx = (load_lanes<kLanes>(p, 2, c.kx) - ox) - sx * cz0, cy = (load_lanes<kLanes>(p, 2, c.ky) - oy) - sy * cz0;
     F U = cx * by - cy * bx;
     F V = ax * cy - ay * cx;
     F W = bx * ay - by * ax;
     const F zero = F::broadcast(0.0f);
     if (const unsigned fallback = (U == zero) | (V == zero) | (W == zero)) {
-      alignas(16) float u[kPacketWidth], v[kPacketWidth], w[kPacketWidth];
-      alignas(16) float lax[kPacketWidth], lay[kPacketWidth], lbx[kPacketWidth], lby[kPacketWidth],
-          lcx[kPacketWidth], lcy[kPacketWidth];
+      alignas(32) float u[kLanes], v[kLanes], w[kLanes];
+      alignas(32) float lax[kLanes], lay[kLanes], lbx[kLanes], lby[kLanes], lcx[kLanes], lcy[kLanes];
       U.store(u), V.store(v), W.store(w);
       ax.store(lax), ay.store(lay), bx.store(lbx), by.store(lby), cx.store(lcx), cy.store(lcy);
       for (unsigned m = fallback; m != 0; m &= m - 1) {
@@ -76,23 +106,17 @@ struct PacketKernel<WatertightKernel> {
     }
     const unsigned mixed = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
     const F det = U + V + W;
-    unsigned ok = ~mixed & ~(det == zero) & finite(det) & ((1u << kPacketWidth) - 1);
+    unsigned ok = ~mixed & ~(det == zero) & finite(det) & ((1u << kLanes) - 1);
     if (ok == 0) return -1;
-    const F T = U * (r.sz * az0) + V * (r.sz * bz0) + W * (r.sz * cz0);
+    const F T = U * (sz * az0) + V * (sz * bz0) + W * (sz * cz0);
     const F inv_det = F::broadcast(1.0f) / det;
     const F t = T * inv_det;
     ok &= (t >= F::broadcast(c.tmin)) & (t < F::broadcast(c.tmax));
     if (ok == 0) return -1;
-    alignas(16) float ts[kPacketWidth];
+    alignas(32) float ts[kLanes];
     t.store(ts);
-    int best = std::countr_zero(ok);
-    if constexpr (!kAnyHit) {
-      for (unsigned m = ok & (ok - 1); m != 0; m &= m - 1) {
-        const int i = std::countr_zero(m);
-        if (ts[i] < ts[best]) best = i;
-      }
-    }
-    alignas(16) float us[kPacketWidth], vs[kPacketWidth];
+    const int best = closest_lane<kAnyHit>(ok, ts);
+    alignas(32) float us[kLanes], vs[kLanes];
     (V * inv_det).store(us);
     (W * inv_det).store(vs);
     c.tmax = ts[best];
@@ -163,25 +187,34 @@ struct PacketKernel<CertifiedKernel> {
 
 template <>
 struct PacketKernel<MollerTrumboreKernel> {
-  using F = simd::Float<kPacketWidth>;
+  /// The ray's origin and direction, broadcast at each test.
   struct Ray {
-    F o[3], d[3];
+    float o[3], d[3];
     Ray() = default;
     explicit Ray(const MollerTrumboreKernel::Context& c) {
       for (int a = 0; a < 3; ++a) {
-        o[a] = F::broadcast(c.ray.org[a]);
-        d[a] = F::broadcast(c.ray.dir[a]);
+        o[a] = c.ray.org[a];
+        d[a] = c.ray.dir[a];
       }
     }
   };
 
   template <bool kAnyHit>
   static int intersect(MollerTrumboreKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
-    F p0[3], e1[3], e2[3];
+    return intersect_lanes<kAnyHit, kPacketWidth>(c, r, &p, hit);
+  }
+
+  /// The kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`, in order.
+  template <bool kAnyHit, int kLanes>
+  static int intersect_lanes(MollerTrumboreKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
+    using F = simd::Float<kLanes>;
+    F o[3], d[3], p0[3], e1[3], e2[3];
     for (int a = 0; a < 3; ++a) {
-      p0[a] = F::load(p.v[0][a]);
-      e1[a] = F::load(p.v[1][a]) - p0[a];
-      e2[a] = F::load(p.v[2][a]) - p0[a];
+      o[a] = F::broadcast(r.o[a]);
+      d[a] = F::broadcast(r.d[a]);
+      p0[a] = load_lanes<kLanes>(p, 0, a);
+      e1[a] = load_lanes<kLanes>(p, 1, a) - p0[a];
+      e2[a] = load_lanes<kLanes>(p, 2, a) - p0[a];
     }
     const auto cross = [](const F* x, const F* y, F* out) {
       out[0] = fmsub(x[1], y[2], x[2] * y[1]);
@@ -193,16 +226,16 @@ struct PacketKernel<MollerTrumboreKernel> {
     // barycentric and distance tests compare unnormalised U, V, T with sign(det) folded in,
     // against |det|, |det|·tmin and |det|·tmax.
     F pv[3], tv[3], qv[3];
-    cross(r.d, e2, pv);
+    cross(d, e2, pv);
     const F det = dot(e1, pv);
     const F zero = F::broadcast(0.0f);
-    unsigned ok = ~(det == zero) & finite(det) & ((1u << kPacketWidth) - 1);
+    unsigned ok = ~(det == zero) & finite(det) & ((1u << kLanes) - 1);
     if (ok == 0) return -1;
     const F sign = sign_bits(det), abs_det = abs(det);
-    for (int a = 0; a < 3; ++a) tv[a] = r.o[a] - p0[a];
+    for (int a = 0; a < 3; ++a) tv[a] = o[a] - p0[a];
     const F U = dot(tv, pv) ^ sign;
     cross(tv, e1, qv);
-    const F V = dot(r.d, qv) ^ sign;
+    const F V = dot(d, qv) ^ sign;
     ok &= (U >= zero) & (V >= zero) & (U + V <= abs_det);
     if (ok == 0) return -1;
     const F T = dot(e2, qv) ^ sign;
@@ -214,15 +247,9 @@ struct PacketKernel<MollerTrumboreKernel> {
     // before the current closest, and on [tmin, ...).
     ok &= (t >= F::broadcast(c.ray.tmin)) & (t < F::broadcast(c.tmax));
     if (ok == 0) return -1;
-    alignas(16) float ts[kPacketWidth], us[kPacketWidth], vs[kPacketWidth];
+    alignas(32) float ts[kLanes], us[kLanes], vs[kLanes];
     t.store(ts);
-    int best = std::countr_zero(ok);
-    if constexpr (!kAnyHit) {
-      for (unsigned m = ok & (ok - 1); m != 0; m &= m - 1) {
-        const int i = std::countr_zero(m);
-        if (ts[i] < ts[best]) best = i;
-      }
-    }
+    const int best = closest_lane<kAnyHit>(ok, ts);
     u.store(us);
     v.store(vs);
     c.tmax = ts[best];
@@ -231,20 +258,78 @@ struct PacketKernel<MollerTrumboreKernel> {
   }
 };
 
-/// Offers the `lanes` filled lanes of `packet` to PacketKernel<Kernel>, counted as a scalar loop
+/// Offers the `lanes` filled lanes of the kLanes / kPacketWidth consecutive packets from `packets`
+/// to PacketKernel<Kernel> (kLanes = 2·kPacketWidth needs its intersect_lanes), counted as a scalar loop
 /// would count them (`lanes` tests, at most one hit). On a hit closer than ctx's closest,
 /// writes `hit` with the lane's scene primitive id and returns true.
-template <class Kernel, bool kAnyHit, class Counters>
-inline bool intersect_triangle_packet(typename Kernel::Context& ctx, const typename PacketKernel<Kernel>::Ray& packet_ray,
-                                      const TrianglePacket& packet, int lanes, Hit& hit, Counters& counters) {
+template <class Kernel, bool kAnyHit, int kLanes = kPacketWidth, class Counters>
+inline bool intersect_triangle_packets(typename Kernel::Context& ctx, const typename PacketKernel<Kernel>::Ray& packet_ray,
+                                       const TrianglePacket* packets, int lanes, Hit& hit, Counters& counters) {
   if constexpr (Counters::enabled)
     for (int i = lanes; i > 0; --i) counters.prim_test();
   TriangleHit th;
-  const int lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, packet, th);
+  int lane;
+  if constexpr (kLanes == kPacketWidth)
+    lane = PacketKernel<Kernel>::template intersect<kAnyHit>(ctx, packet_ray, *packets, th);
+  else
+    lane = PacketKernel<Kernel>::template intersect_lanes<kAnyHit, kLanes>(ctx, packet_ray, packets, th);
   if (lane < 0) return false;
   counters.prim_hit();
-  set_scene_hit(hit, th, packet.prim[lane]);
+  set_scene_hit(hit, th, packets[lane / kPacketWidth].prim[lane % kPacketWidth]);
   return true;
+}
+
+/// One packet: intersect_triangle_packets with kLanes = kPacketWidth.
+template <class Kernel, bool kAnyHit, class Counters>
+inline bool intersect_triangle_packet(typename Kernel::Context& ctx, const typename PacketKernel<Kernel>::Ray& packet_ray,
+                                      const TrianglePacket& packet, int lanes, Hit& hit, Counters& counters) {
+  return intersect_triangle_packets<Kernel, kAnyHit>(ctx, packet_ray, &packet, lanes, hit, counters);
+}
+
+/// Kernels with an 8-lane packet test (PacketKernel::intersect_lanes<kAnyHit, 8>).
+template <class Kernel>
+inline constexpr bool kPairedPackets =
+    std::is_same_v<Kernel, WatertightKernel> || std::is_same_v<Kernel, MollerTrumboreKernel>;
+
+/// Offers a leaf's `count` packets from `packets` (pack_leaf's order: triangle packets, then
+/// sphere packets, tested scalar) to Kernel in order; true when one of them became the closest
+/// hit (with kAnyHit: at the first hit). Two consecutive triangle packets go as one 8-lane test
+/// where the kernel has one (the default leaf_size 8 makes most leaves two packets).
+template <class Kernel, bool kAnyHit, class Counters>
+inline bool intersect_packed_leaf(const Scene& scene, typename Kernel::Context& ctx,
+                                  const typename PacketKernel<Kernel>::Ray& packet_ray, const TrianglePacket* packets,
+                                  std::uint32_t count, Hit& hit, Counters& counters) {
+  bool found = false;
+  const TrianglePacket* const end = packets + count;
+  for (const TrianglePacket* p = packets; p != end;) {
+    if (scene.is_sphere(p->prim[0])) {
+      for (int i = 0; i < kPacketWidth && p->prim[i] != kInvalidId; ++i)
+        if (intersect_scene_primitive<Kernel>(scene, p->prim[i], ctx, hit, counters)) {
+          found = true;
+          if constexpr (kAnyHit) return true;
+        }
+      ++p;
+      continue;
+    }
+    if constexpr (kPairedPackets<Kernel>) {
+      if (end - p >= 2 && !scene.is_sphere(p[1].prim[0])) {
+        const int lanes = Counters::enabled ? p[0].size() + p[1].size() : 0;
+        if (intersect_triangle_packets<Kernel, kAnyHit, 2 * kPacketWidth>(ctx, packet_ray, p, lanes, hit, counters)) {
+          found = true;
+          if constexpr (kAnyHit) return true;
+        }
+        p += 2;
+        continue;
+      }
+    }
+    if (intersect_triangle_packet<Kernel, kAnyHit>(ctx, packet_ray, *p, Counters::enabled ? p->size() : 0, hit,
+                                                   counters)) {
+      found = true;
+      if constexpr (kAnyHit) return true;
+    }
+    ++p;
+  }
+  return found;
 }
 
 }  // namespace raylab

@@ -56,6 +56,10 @@ template <>
 struct Float<8> {
   __m256 v;
   static Float load(const float* p) { return {_mm256_load_ps(p)}; }
+  /// Lanes 0-3 from `lo`, 4-7 from `hi` (each 16-byte aligned).
+  static Float load_halves(const float* lo, const float* hi) {
+    return {_mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(lo)), _mm_load_ps(hi), 1)};
+  }
   static Float broadcast(float x) { return {_mm256_set1_ps(x)}; }
   void store(float* p) const { _mm256_store_ps(p, v); }
   friend Float operator+(Float a, Float b) { return {_mm256_add_ps(a.v, b.v)}; }
@@ -71,6 +75,9 @@ struct Float<8> {
     return {_mm256_sub_ps(_mm256_mul_ps(a.v, b.v), c.v)};
 #endif
   }
+  friend Float abs(Float a) { return {_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)}; }
+  friend Float sign_bits(Float a) { return {_mm256_and_ps(a.v, _mm256_set1_ps(-0.0f))}; }
+  friend Float operator^(Float a, Float b) { return {_mm256_xor_ps(a.v, b.v)}; }
 #if defined(__AVX512F__) && defined(__AVX512VL__)
   friend unsigned operator<=(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
   friend unsigned operator<(Float a, Float b) { return _mm256_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
@@ -106,6 +113,7 @@ template <>
 struct Float<8> {
   Float<4> lo, hi;
   static Float load(const float* p) { return {Float<4>::load(p), Float<4>::load(p + 4)}; }
+  static Float load_halves(const float* lo, const float* hi) { return {Float<4>::load(lo), Float<4>::load(hi)}; }
   static Float broadcast(float x) { return {Float<4>::broadcast(x), Float<4>::broadcast(x)}; }
   void store(float* p) const { lo.store(p); hi.store(p + 4); }
   friend Float operator+(Float a, Float b) { return {a.lo + b.lo, a.hi + b.hi}; }
@@ -115,6 +123,9 @@ struct Float<8> {
   friend Float min(Float a, Float b) { return {min(a.lo, b.lo), min(a.hi, b.hi)}; }
   friend Float max(Float a, Float b) { return {max(a.lo, b.lo), max(a.hi, b.hi)}; }
   friend Float fmsub(Float a, Float b, Float c) { return {fmsub(a.lo, b.lo, c.lo), fmsub(a.hi, b.hi, c.hi)}; }
+  friend Float abs(Float a) { return {abs(a.lo), abs(a.hi)}; }
+  friend Float sign_bits(Float a) { return {sign_bits(a.lo), sign_bits(a.hi)}; }
+  friend Float operator^(Float a, Float b) { return {a.lo ^ b.lo, a.hi ^ b.hi}; }
   friend unsigned operator<=(Float a, Float b) { return (a.lo <= b.lo) | ((a.hi <= b.hi) << 4); }
   friend unsigned operator<(Float a, Float b) { return (a.lo < b.lo) | ((a.hi < b.hi) << 4); }
   friend unsigned operator>(Float a, Float b) { return (a.lo > b.lo) | ((a.hi > b.hi) << 4); }
