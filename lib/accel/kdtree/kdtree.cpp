@@ -11,11 +11,6 @@ KdTree::KdTree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config)
     tris_ = make_triangle_soup(*scene_);
     return;
   }
-  if (uses_treelets()) {
-    treelets_ = kd_treelets(*scene_, data_.nodes, data_.prims);
-    std::vector<std::uint32_t>().swap(data_.prims);
-    return;
-  }
   lines_ = kd_node_lines(data_.nodes);
   packets_ = kd_pack_leaves(*scene_, data_.prims, lines_);
   // Packed leaves carry their primitive ids; without packets (spheres) the leaves index prims.
@@ -25,7 +20,7 @@ KdTree::KdTree(std::shared_ptr<const Scene> scene, const KdTreeConfig& config)
 AccelStats KdTree::stats() const {
   return {data_.nodes.size() * sizeof(KdNode) + data_.prims.size() * sizeof(std::uint32_t) +
               tris_.size() * sizeof(KdTriangle) + lines_.size() * sizeof(KdNodeLine) +
-              packets_.size() * sizeof(TrianglePacket) + treelets_.bytes(),
+              packets_.size() * sizeof(TrianglePacket),
           data_.nodes.size(),
           data_.sah_cost};
 }
@@ -36,14 +31,13 @@ namespace {
 
 const std::vector<std::string> kBuilders = {"midpoint", "median", "sah"};
 const std::vector<std::string> kSweeps = {"sort", "events"};
-const std::vector<std::string> kTraversals = {"recursive", "stack", "wide"};
+const std::vector<std::string> kTraversals = {"recursive", "stack"};
 
 std::vector<ParamDoc> kdtree_params() {
   return {{"builder", "sah", "midpoint | median | sah"},
           {"sweep", "events", "SAH sweep: sort (per-node sort, O(N log^2 N)) | events (Wald-Havran 2006, O(N log N))"},
           {"clip", "exact", "split clipping: none | bbox | exact (CGAL triangle/box predicate, perfect splits)"},
-          {"traversal", "stack",
-           "recursive (Kaplan/Arvo/Jansen) | stack (nodes in cache lines) | wide (two-level treelets; spheres: stack)"},
+          {"traversal", "stack", "recursive (Kaplan/Arvo/Jansen) | stack"},
           {"c_trav", "1", "SAH traversal cost"},
           {"c_isect", "0.2", "SAH intersection cost (kdtree_config.h: kKdDefaultIsect)"},
           fitted_cost_param(),
@@ -62,9 +56,7 @@ KdTreeConfig read_kdtree_config(SpecReader& r) {
   c.builder = b == "midpoint" ? KdBuilder::midpoint : (b == "median" ? KdBuilder::median : KdBuilder::sah);
   c.sweep = r.get_choice("sweep", "events", kSweeps) == "sort" ? KdSweep::sort : KdSweep::events;
   c.clip = parse_clip_mode(r.get_choice("clip", "exact", clip_mode_names()));
-  const std::string traversal = r.get_choice("traversal", "stack", kTraversals);
-  c.traversal = traversal == "recursive" ? KdTraversal::recursive
-                                         : (traversal == "stack" ? KdTraversal::stack : KdTraversal::wide);
+  c.traversal = r.get_choice("traversal", "stack", kTraversals) == "recursive" ? KdTraversal::recursive : KdTraversal::stack;
   read_sah_constants(r, "kdtree", 1.0, kKdDefaultIsect, c.cost);
   c.cost.empty_bonus = r.get_double("empty_bonus", 0.2, 0.0, 0.99);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 64));
@@ -96,8 +88,7 @@ AccelKind make_kdtree_kind() {
           },
           {"builder=midpoint,traversal=recursive", "builder=median,clip=bbox,mailbox=on", "sweep=sort,clip=none",
            "clip=bbox,traversal=recursive,mailbox=on", "cost=default", "kernel=certified",
-           "kernel=certified,traversal=recursive,clip=bbox,mailbox=on", "traversal=wide",
-           "traversal=wide,kernel=certified,mailbox=on"}};
+           "kernel=certified,traversal=recursive,clip=bbox,mailbox=on"}};
 }
 
 namespace {

@@ -19,8 +19,8 @@ class KdTree final : public AggregateBase<KdTree> {
   Bounds3f bounds() const override { return data_.bounds; }
   std::optional<std::uint64_t> structure_hash() const override;
 
-  /// The built tree. Its `prims` are released (empty) once the stack or wide traversal reads
-  /// packed leaves, which carry their primitive ids: build_kdtree gives the full data.
+  /// The built tree. Its `prims` are released (empty) once the stack traversal reads packed
+  /// leaves, which carry their primitive ids: build_kdtree gives the full data.
   const KdTreeData& data() const { return data_; }
   const KdTreeConfig& config() const { return config_; }
 
@@ -46,24 +46,15 @@ class KdTree final : public AggregateBase<KdTree> {
 
   template <class K, bool kAnyHit, class Counters>
   bool traverse(const Ray& ray, Hit& hit, Counters& counters) const {
-    if (uses_treelets()) {
-      const KdTreeView view{nullptr, nullptr, scene_.get(), data_.bounds, nullptr, nullptr, treelets_.packets.data(),
-                            treelets_.nodes.data(), treelets_.big_leaves.data(), treelets_.root};
-      return config_.mailbox ? kd_traverse_treelets<K, kAnyHit, true>(view, ray, hit, counters)
-                             : kd_traverse_treelets<K, kAnyHit, false>(view, ray, hit, counters);
-    }
     const KdTreeView view{data_.nodes.data(), data_.prims.data(), scene_.get(), data_.bounds,
                           tris_.empty() ? nullptr : tris_.data(), lines_.empty() ? nullptr : lines_.front().node,
                           packets_.empty() ? nullptr : packets_.data()};
-    if (config_.traversal != KdTraversal::recursive)
+    if (config_.traversal == KdTraversal::stack)
       return config_.mailbox ? kd_traverse_lines<K, kAnyHit, true>(view, ray, hit, counters)
                              : kd_traverse_lines<K, kAnyHit, false>(view, ray, hit, counters);
     return config_.mailbox ? kd_traverse_recursive<K, kAnyHit, true>(view, ray, hit, counters)
                            : kd_traverse_recursive<K, kAnyHit, false>(view, ray, hit, counters);
   }
-
-  /// Treelets need packed triangles: a scene with spheres takes the stack traversal.
-  bool uses_treelets() const { return config_.traversal == KdTraversal::wide && scene_->spheres.empty(); }
 
   std::shared_ptr<const Scene> scene_;
   KdTreeConfig config_;
@@ -73,7 +64,6 @@ class KdTree final : public AggregateBase<KdTree> {
   std::vector<KdTriangle> tris_;   ///< recursive: the triangles by primitive id (kdtree_triangle_soup.h)
   std::vector<KdNodeLine> lines_;  ///< stack: data_.nodes in cache lines
   std::vector<TrianglePacket> packets_;  ///< stack: the leaves of lines_ packed 4-wide (kd_pack_leaves)
-  KdTreelets treelets_;                  ///< wide: the tree in two-level treelets, with its packed leaves
 };
 
 /// The factory entry: parameters, accuracy bound and oracle variants.

@@ -22,7 +22,6 @@ enum class KdSweep {
 enum class KdTraversal {
   recursive,  ///< Kaplan/Arvo/Jansen recursive in-order traversal
   stack,      ///< the same order with an explicit stack (Havran's thesis, TA_B^rec), over nodes in cache lines
-  wide,       ///< the same order over two-level treelets (kdtree_treelets.h); scenes with spheres: stack
 };
 
 /// The default C_isect for C_trav = 1: the ratio of the lab's fitted kd-tree constants

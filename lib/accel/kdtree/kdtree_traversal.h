@@ -22,10 +22,7 @@
 /// interval is taken on [tmin, initial_closest] (kernel_choice.h), Kernel::closest() is an upper
 /// bound of the exact first hit raised past the rounding of any entry t, and the widened t* has
 /// a relative slack (1e-6) above its rounding error (γ3 < 2^-21).
-#include <immintrin.h>
-
 #include <cmath>
-#include <cstring>
 #include <cstdint>
 #include <limits>
 
@@ -33,7 +30,6 @@
 #include "accel/common/kernel_choice.h"
 #include "accel/kdtree/kdtree_node.h"
 #include "accel/kdtree/kdtree_node_lines.h"
-#include "accel/kdtree/kdtree_treelets.h"
 #include "accel/kdtree/kdtree_triangle_soup.h"
 #include "geometry/bounds.h"
 #include "scene/scene_primitives.h"
@@ -55,11 +51,6 @@ struct KdTreeView {
   /// The leaves of `lines` packed 4-wide (kd_pack_leaves), or null: a leaf of `lines` then holds
   /// its first packet's index instead of an offset into `prims`.
   const TrianglePacket* packets = nullptr;
-  /// The same tree in two-level treelets (kdtree_treelets.h), for kd_traverse_treelets; their
-  /// leaves index `packets` and `big_leaves`, and `treelet_root` is the root's child word.
-  const KdTreelet* treelets = nullptr;
-  const KdBigLeaf* big_leaves = nullptr;
-  std::uint32_t treelet_root = kKdEmptyChild;
 };
 
 /// A direct-mapped mailbox of the last primitives a ray tested (Amanatides and Woo 1987): a
@@ -102,12 +93,6 @@ inline KdPlaneCrossing kd_cross(const KdNode& node, std::uint32_t index, const R
   const std::uint32_t lower = index + 1, upper = node.above_child();
   return {w0 < w1 ? w0 : w1, w0 < w1 ? w1 : w0, lower_first ? lower : upper, lower_first ? upper : lower};
 }
-
-/// A split plane's t* = (split - o) · inv widened by kKdPlaneSlack on each side, as in kd_cross
-/// (NaN when the ray lies in the plane).
-struct KdSlab {
-  float lo, hi;
-};
 
 /// Tests primitives prims[0, n) of `scene`, skipping those the mailbox has seen; true on a hit
 /// (an any-hit query stops at the first).
@@ -263,119 +248,6 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
       --top;
     } while (Kernel::closest(ctx) < stack[top].tmin);  // the hit lies before that cell
     index = stack[top].node;
-    tmin = stack[top].tmin;
-    tmax = stack[top].tmax;
-  }
-}
-
-/// The slabs (KdSlab) of a treelet's three planes, lane k for plane k (lane 3 unused), computed
-/// together: lane j of org4 and rcp4 is the ray's origin and inverse direction along axis j
-/// (lane 3: 0 and +inf, the plane-less axis kKdNoPlane, whose plane at 1 gives t* = +inf).
-/// Bit-identical to kd_cross's t_lo and t_hi plane by plane.
-struct KdTreeletSlabs {
-  alignas(16) float lo[4];
-  alignas(16) float hi[4];
-};
-
-inline KdTreeletSlabs kd_treelet_slabs(const KdTreelet& n, __m128 org4, __m128 rcp4) {
-  const __m128 split = _mm_load_ps(n.split);  // lane 3 holds the axis bytes: unused
-#if defined(__AVX__)
-  std::int32_t axes;
-  std::memcpy(&axes, n.axis, sizeof axes);
-  const __m128i axis = _mm_cvtepu8_epi32(_mm_cvtsi32_si128(axes));
-  const __m128 o = _mm_permutevar_ps(org4, axis), r = _mm_permutevar_ps(rcp4, axis);
-#else
-  alignas(16) float org[4], rcp[4];
-  _mm_store_ps(org, org4);
-  _mm_store_ps(rcp, rcp4);
-  const __m128 o = _mm_setr_ps(org[n.axis[0]], org[n.axis[1]], org[n.axis[2]], 0.0f);
-  const __m128 r = _mm_setr_ps(rcp[n.axis[0]], rcp[n.axis[1]], rcp[n.axis[2]], 0.0f);
-#endif
-  static constexpr float kBelow = 1.0f - kKdPlaneSlack, kAbove = 1.0f + kKdPlaneSlack;
-  const __m128 t = _mm_mul_ps(_mm_sub_ps(split, o), r);  // NaN: the ray lies in the plane
-  const __m128 w0 = _mm_mul_ps(t, _mm_set1_ps(kBelow)), w1 = _mm_mul_ps(t, _mm_set1_ps(kAbove));
-  KdTreeletSlabs s;
-  _mm_store_ps(s.lo, _mm_min_ps(w0, w1));  // w0 < w1 ? w0 : w1
-  _mm_store_ps(s.hi, _mm_max_ps(w1, w0));  // w1 > w0 ? w1 : w0, so w0 on NaN
-  return s;
-}
-
-/// Iterative traversal over two-level treelets (tree.treelets, kdtree_treelets.h): the same
-/// front-to-back order and the same widened comparisons as kd_traverse_lines, two levels per
-/// node load. The three planes' t* are computed independently; the near side X of plane 0 is
-/// side [inv[a0] <= 0], and under it the near side of plane 1 + X, so the four grandchildren in
-/// ray order and their intervals follow from the direction signs without a branch:
-///   near side of plane 0 on [tmin, min(t0_hi, tmax)], far side on [max(t0_lo, tmin), tmax],
-///   each split again by its own plane the same way.
-/// A grandchild is entered when its interval is not empty and starts before the closest hit
-/// (lo <= min(hi, closest)); the later ones are pushed far first, the first is entered. The
-/// min/max keep the bound on a NaN t* (a ray lying in the plane), so that ray visits both sides
-/// on the whole interval, as in kd_traverse_lines. A plane-less child (kKdNoPlane) has t* = +inf:
-/// its near slot, the leaf, gets the whole interval. Counters count one node per treelet.
-template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
-bool kd_traverse_treelets(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
-  const Vec3f inv = safe_inverse(ray.dir);
-  float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
-  auto ctx = Kernel::prepare(ray);
-  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
-  KdMailbox<kMailbox> mailbox;
-  const __m128 org4 = _mm_setr_ps(ray.org.x, ray.org.y, ray.org.z, 0.0f);
-  const __m128 rcp4 = _mm_setr_ps(inv.x, inv.y, inv.z, std::numeric_limits<float>::infinity());
-  // Bit a: the upper side of an axis-a plane comes first (inv[a] <= 0); bit 3 (kKdNoPlane): 0.
-  const std::uint32_t upper_first = (inv.x > 0.0f ? 0u : 1u) | (inv.y > 0.0f ? 0u : 2u) | (inv.z > 0.0f ? 0u : 4u);
-  auto below = [](float t, float bound) { return t < bound ? t : bound; };  // NaN t: bound
-  auto above = [](float t, float bound) { return t > bound ? t : bound; };
-  struct Entry {
-    std::uint32_t child;
-    float tmin, tmax;
-  };
-  Entry stack[104];  // at most 3 per treelet, at most 32 treelets deep (depth <= 64)
-  int top = 0;
-  bool found = false;
-  std::uint32_t child = tree.treelet_root;
-  for (;;) {
-    if (!kd_child_is_leaf(child)) {
-      counters.node();
-      const KdTreelet& n = tree.treelets[child >> 1];
-      const std::uint32_t x = (upper_first >> n.axis[0]) & 1u;
-      const std::uint32_t an = n.axis[1 + x], af = n.axis[2 - x];
-      const KdTreeletSlabs s = kd_treelet_slabs(n, org4, rcp4);
-      const KdSlab p0{s.lo[0], s.hi[0]}, pn{s.lo[1 + x], s.hi[1 + x]}, pf{s.lo[2 - x], s.hi[2 - x]};
-      const std::uint32_t* near_pair = n.child + 2 * x;
-      const std::uint32_t* far_pair = n.child + 2 * (x ^ 1u);
-      const std::uint32_t sn = (upper_first >> an) & 1u, sf = (upper_first >> af) & 1u;
-      const std::uint32_t a_child = near_pair[sn], b_child = near_pair[sn ^ 1u];
-      const std::uint32_t c_child = far_pair[sf], d_child = far_pair[sf ^ 1u];
-      const float near_hi = below(p0.hi, tmax), far_lo = above(p0.lo, tmin);
-      const float a_hi = below(pn.hi, near_hi), b_lo = above(pn.lo, tmin);
-      const float c_hi = below(pf.hi, tmax), d_lo = above(pf.lo, far_lo);
-      const float closest = Kernel::closest(ctx);
-      // Pushed without branches: an entry is written, and kept when it is to be visited.
-      stack[top] = {d_child, d_lo, tmax};
-      top += static_cast<int>(d_child != kKdEmptyChild) & static_cast<int>(d_lo <= std::min(tmax, closest));
-      stack[top] = {c_child, far_lo, c_hi};
-      top += static_cast<int>(c_child != kKdEmptyChild) & static_cast<int>(far_lo <= std::min(c_hi, closest));
-      stack[top] = {b_child, b_lo, near_hi};
-      top += static_cast<int>(b_child != kKdEmptyChild) & static_cast<int>(b_lo <= std::min(near_hi, closest));
-      if (a_child != kKdEmptyChild && tmin <= std::min(a_hi, closest)) {
-        child = a_child;
-        tmax = a_hi;
-        continue;
-      }
-    } else {
-      const KdBigLeaf leaf = kd_child_leaf(child, tree.big_leaves);
-      if (kd_test_packed_leaf<Kernel, kAnyHit, kMailbox>(tree.packets + leaf.first, leaf.count, ctx, packet_ray, hit,
-                                                         mailbox, counters)) {
-        found = true;
-        if constexpr (kAnyHit) return true;
-      }
-    }
-    do {
-      if (top == 0) return found;
-      --top;
-    } while (Kernel::closest(ctx) < stack[top].tmin);  // the hit lies before that cell
-    child = stack[top].child;
     tmin = stack[top].tmin;
     tmax = stack[top].tmax;
   }
