@@ -8,7 +8,11 @@
 //    throughput over Embree's on the same rays (1.0 = as fast), Embree's pass alternating with ours,
 //    best pass of each over the same number of passes.
 //   build/experiments/bench_kdtree --benchmark_min_time=0.2
-// BM_KdTrace measures the spec in $RAYLAB_KD_SPEC when set (e.g. RAYLAB_KD_SPEC=kdtree:cost=default).
+// BM_KdTrace measures the spec in $RAYLAB_KD_SPEC when set (e.g. RAYLAB_KD_SPEC=kdtree:cost=default);
+// with $RAYLAB_KD_BASE set (e.g. RAYLAB_KD_BASE=kdtree:traversal=stack) it times that spec too, in
+// the same alternation, and counter `vs_base` is our throughput over the base spec's. With
+// $RAYLAB_KD_CPU_TIME=1 a pass is timed by the tracing thread's CPU time instead of wall time (on
+// a loaded machine it leaves out the time the thread waited for a core).
 #include <benchmark/benchmark.h>
 
 #include <tbb/task_arena.h>
@@ -40,6 +44,24 @@ std::shared_ptr<const Scene> scene_for(const std::string& spec) {
 std::string kd_spec() {
   const char* env = std::getenv("RAYLAB_KD_SPEC");
   return env != nullptr && *env != '\0' ? env : "kdtree";
+}
+
+/// The spec BM_KdTrace compares against, $RAYLAB_KD_BASE, or empty.
+std::string kd_base_spec() {
+  const char* env = std::getenv("RAYLAB_KD_BASE");
+  return env != nullptr ? env : "";
+}
+
+/// A single-threaded trace pass's time: wall time, or with $RAYLAB_KD_CPU_TIME=1 the tracing
+/// thread's CPU time (trace_rays runs a one-thread arena on the calling thread).
+double pass_seconds(const Aggregate& accel, const std::vector<Ray>& rays) {
+  static const bool cpu = [] {
+    const char* env = std::getenv("RAYLAB_KD_CPU_TIME");
+    return env != nullptr && std::string(env) == "1";
+  }();
+  const TraceResult r = trace_rays(accel, rays, TraceOptions{1, false, false});
+  benchmark::DoNotOptimize(r.hit_count);
+  return cpu ? r.thread_cpu_seconds : r.seconds;
 }
 
 /// CPU time of the calling thread spent building `accel_spec` (single-threaded builds only): on a
@@ -79,13 +101,15 @@ void BM_KdTrace(benchmark::State& state, const std::string& scene_spec, const st
   const auto rays = make_ray_set(ray_spec, scene);
   const auto embree = make_accelerator("embree", scene);
   const auto accel = make_accelerator(kd_spec(), scene);
-  double best = 1e300, embree_s = 1e300;
+  const std::string base_spec = kd_base_spec();
+  const auto base = base_spec.empty() ? nullptr : make_accelerator(base_spec, scene);
+  double best = 1e300, embree_s = 1e300, base_s = 1e300;
   for (auto _ : state) {
-    const TraceResult r = trace_rays(*accel, rays, TraceOptions{1, false, false});
-    best = std::min(best, r.seconds);
-    benchmark::DoNotOptimize(r.hit_count);
-    embree_s = std::min(embree_s, trace_rays(*embree, rays, TraceOptions{1, false, false}).seconds);
+    best = std::min(best, pass_seconds(*accel, rays));
+    embree_s = std::min(embree_s, pass_seconds(*embree, rays));
+    if (base) base_s = std::min(base_s, pass_seconds(*base, rays));
   }
+  if (base) state.counters["vs_base"] = base_s / best;
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * rays.size()));
   state.counters["ns_per_ray"] = best / static_cast<double>(rays.size()) * 1e9;
   state.counters["embree_ns_per_ray"] = embree_s / static_cast<double>(rays.size()) * 1e9;

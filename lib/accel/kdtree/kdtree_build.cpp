@@ -5,6 +5,7 @@
 #include <span>
 #include <string>
 
+#include "accel/kdtree/huge_pages.h"
 #include "accel/kdtree/sah_sweep_events.h"
 #include "accel/kdtree/sah_sweep_sort.h"
 #include "geometry/input_error.h"
@@ -49,6 +50,15 @@ class KdBuilderImpl {
     std::vector<PrimRef> refs[2];
     NodeEvents events[2];
   };
+
+  /// Room for `n` references in an empty list (a child gets at most its parent's n), so that it
+  /// never grows by copying while filled; the room at least doubles, so a level's list is
+  /// reallocated O(log N) times; new room of 4 MiB and more is asked for in huge pages.
+  static void reserve_refs(std::vector<PrimRef>& refs, std::size_t n) {
+    if (refs.capacity() >= n) return;
+    refs.reserve(std::max(n, 2 * refs.capacity()));
+    advise_huge_pages(refs.data(), refs.capacity() * sizeof(PrimRef));
+  }
 
   double area_weight(const Bounds3f& box) const { return root_sa_ > 0.0 ? surface_area_d(box) / root_sa_ : 1.0; }
 
@@ -130,6 +140,8 @@ class KdBuilderImpl {
     std::vector<PrimRef>& right_straddlers = right_straddlers_;
     left.clear();
     right.clear();
+    reserve_refs(left, n);
+    reserve_refs(right, n);
     left_straddlers.clear();
     right_straddlers.clear();
     // The parent events each child keeps, per axis (one if planar along the axis, else two).

@@ -18,6 +18,7 @@
 #include <span>
 #include <vector>
 
+#include "accel/kdtree/huge_pages.h"
 #include "accel/kdtree/sah_cost.h"
 #include "accel/kdtree/split_clipping.h"
 
@@ -45,13 +46,19 @@ struct SplitEvent {
 static_assert(sizeof(SplitEvent) == 8);
 
 /// An allocator whose value-less construct leaves trivial types uninitialised, so that
-/// resizing an event list before overwriting it costs nothing.
+/// resizing an event list before overwriting it costs nothing, and that asks for huge pages for
+/// large lists (huge_pages.h), so that their first writes fault once per 2 MiB.
 template <class T>
 struct UninitAllocator : std::allocator<T> {
   template <class U>
   struct rebind {
     using other = UninitAllocator<U>;
   };
+  T* allocate(std::size_t n) {
+    T* p = std::allocator<T>::allocate(n);
+    advise_huge_pages(p, n * sizeof(T));
+    return p;
+  }
   template <class U, class... Args>
   void construct(U* p, Args&&... args) {
     if constexpr (sizeof...(Args) == 0)
