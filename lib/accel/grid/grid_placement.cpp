@@ -147,9 +147,8 @@ void check_ref_count(std::size_t total) {
 /// With `copy` (a scene of triangles only), also writes the triangles in visit order to it,
 /// scattered while the scene is read in input order (sequential reads, independent writes).
 template <class PrimAt>
-std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
-                                       float margin, std::uint32_t* counts,
-                                       std::vector<CellTriangles::Triangle>* copy) {
+BuildArray<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
+                                      float margin, std::uint32_t* counts, BuildArray<CellTriangles::Triangle>* copy) {
   BuildArray<std::uint32_t> key(n);
   for (std::size_t p = 0; p < n; ++p) {
     const Bounds3f b = prim_bounds(scene, prim_at(p));
@@ -158,7 +157,7 @@ std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt
   }
   const std::size_t cells = g.cell_count();
   for (std::size_t c = 1; c < cells; ++c) counts[c] += counts[c - 1];
-  std::vector<std::uint32_t> order(n);
+  BuildArray<std::uint32_t> order(n);
   if (copy) {
     copy->resize(n);
     const auto& v = scene.mesh.vertices;
@@ -186,10 +185,10 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   // sequential reads for the passes (clipping reads every triangle twice).
   const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
   CellTriangles visit_tris;
-  std::vector<std::uint32_t> order =
+  BuildArray<std::uint32_t> order =
       visit_order(scene, n, prim_at, g, margin, out.offsets.data(), gather ? &visit_tris.tris : nullptr);
   if (gather) visit_tris.prim_of = std::move(order);
-  const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
+  const BuildArray<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
   // The cell range of the p-th primitive visited, from its copied triangle when there is one.
   auto range_of = [&](std::size_t p) {
     if (!gather) return cell_range(g, prim_bounds(scene, prims[p]), margin);
