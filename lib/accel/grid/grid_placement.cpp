@@ -206,8 +206,9 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   };
   // The fill of a two-pass placement whose counts are in offsets[c]: an inclusive prefix sum
   // makes offsets[c] the end of cell c, and filling backwards (last primitive first) over the
-  // rows rows_of(p, row) reports leaves it at the start, with every cell's list in visiting order.
-  auto fill = [&](std::size_t total, auto&& rows_of) {
+  // runs of cells runs_of(p, run) reports for primitive p, run(first cell, cell count), leaves it
+  // at the start, with every cell's list in visiting order.
+  auto fill = [&](std::size_t total, auto&& runs_of) {
     std::uint32_t* cursor = out.offsets.data();
     for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
     out.offsets[cells] = static_cast<std::uint32_t>(total);
@@ -215,12 +216,16 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     std::uint32_t* refs = out.refs.data();
     for (std::size_t p = n; p-- > 0;) {
       const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
-      rows_of(p, [&](int j, int k, int ilo, int ihi) {
-        std::uint32_t* row = cursor + g.index(0, j, k);
-        for (int i = ilo; i <= ihi; ++i) refs[--row[i]] = ref;
+      runs_of(p, [&](std::uint32_t first, std::uint32_t count) {
+        std::uint32_t* run = cursor + first;
+        for (std::uint32_t i = 0; i < count; ++i) refs[--run[i]] = ref;
       });
     }
     if (local) out.triangles = std::move(visit_tris);
+  };
+  // The rows of cells of the bounding box of primitive p, as runs.
+  auto bbox_runs = [&](std::size_t p, auto&& run) {
+    bbox_rows(p, [&](int j, int k, int ilo, int ihi) { run(g.index(ilo, j, k), std::uint32_t(ihi - ilo + 1)); });
   };
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
@@ -266,12 +271,14 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           }
       }
     }
-    fill(total, bbox_rows);
+    fill(total, bbox_runs);
     return out;
   }
   if (placement == GridPlacement::clipped) {
-    // Two passes over the clipped rows: counts by a difference array along each row (+1 at the
-    // row range's first cell, -1 past its last) and prefix sums along x, then the fill.
+    // One clipping pass records the rows of cells of every primitive as runs (first cell, cell
+    // count), in visiting order, and counts them by a difference array along each row (+1 at the
+    // run's first cell, -1 past its last), then prefix sums along x; the fill replays the runs.
+    // Clipping is most of the work, and a run (8 bytes) is written and read once instead.
     const int nx = g.res[0];
     std::uint32_t* cursor = out.offsets.data();
     auto rows_of = [&](std::size_t p, auto&& row) {
@@ -289,18 +296,41 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
         for_each_clipped_row(g, tri, r, margin, row);
       }
     };
+    // A run: its first cell and its cell count; a row of more than 255 cells is several runs.
+    BuildArray<std::uint32_t> run_first;
+    BuildArray<std::uint8_t> run_count;
+    // The rows of the bounding boxes bound the runs but for long rows: reserved (address space; only
+    // the runs written are touched) up to a cap, so that large triangles do not reserve far more
+    // than they write; beyond it the arrays grow.
+    std::size_t bbox_rows_total = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      const CellRange r = range_of(p);
+      bbox_rows_total += std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+    }
+    const std::size_t capacity = std::min(bbox_rows_total, 64 * n + cells);
+    run_first.reserve(capacity);
+    run_count.reserve(capacity);
+    BuildArray<std::uint32_t> runs_end(n);  // primitive p's runs: [runs_end[p-1] (0 for p = 0), runs_end[p])
     std::size_t total = 0;
-    for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t p = 0; p < n; ++p) {
       rows_of(p, [&](int j, int k, int ilo, int ihi) {
-        std::uint32_t* cells_row = cursor + g.index(0, j, k);
-        ++cells_row[ilo];
-        if (ihi + 1 < nx) --cells_row[ihi + 1];
-        total += std::size_t(ihi - ilo + 1);
+        const std::uint32_t first = g.index(ilo, j, k), count = std::uint32_t(ihi - ilo + 1);
+        ++cursor[first];
+        if (ihi + 1 < nx) --cursor[first + count];
+        for (std::uint32_t at = 0; at < count; at += 255) {
+          run_first.push_back(first + at);
+          run_count.push_back(static_cast<std::uint8_t>(std::min(count - at, 255u)));
+        }
+        total += count;
       });
-    check_ref_count(total);
+      check_ref_count(total);  // also bounds the runs (each holds a reference) before they grow further
+      runs_end[p] = static_cast<std::uint32_t>(run_first.size());
+    }
     for (std::size_t base = 0; base < cells; base += std::size_t(nx))
       for (std::size_t i = 1; i < std::size_t(nx); ++i) cursor[base + i] += cursor[base + i - 1];
-    fill(total, rows_of);
+    fill(total, [&](std::size_t p, auto&& run) {
+      for (std::uint32_t r = p == 0 ? 0 : runs_end[p - 1]; r < runs_end[p]; ++r) run(run_first[r], run_count[r]);
+    });
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.
