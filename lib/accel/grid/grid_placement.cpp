@@ -182,7 +182,7 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   out.offsets.assign(cells + 1, 0);
   const bool local = ids == CellRefIds::visit_order;
   // The triangles in visit order, copied once: the reference ids of a local build, and
-  // sequential reads for the passes (clipping reads every triangle twice).
+  // sequential reads for the passes (clipping reads every triangle again).
   const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
   CellTriangles visit_tris;
   BuildArray<std::uint32_t> order =
@@ -223,9 +223,11 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     }
     if (local) out.triangles = std::move(visit_tris);
   };
-  // The rows of cells of the bounding box of primitive p, as runs.
-  auto bbox_runs = [&](std::size_t p, auto&& run) {
-    bbox_rows(p, [&](int j, int k, int ilo, int ihi) { run(g.index(ilo, j, k), std::uint32_t(ihi - ilo + 1)); });
+  // The rows rows_of(p, row) reports, as runs.
+  auto as_runs = [&](auto& rows_of) {
+    return [&](std::size_t p, auto&& run) {
+      rows_of(p, [&](int j, int k, int ilo, int ihi) { run(g.index(ilo, j, k), std::uint32_t(ihi - ilo + 1)); });
+    };
   };
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
@@ -271,14 +273,14 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           }
       }
     }
-    fill(total, bbox_runs);
+    fill(total, as_runs(bbox_rows));
     return out;
   }
   if (placement == GridPlacement::clipped) {
     // One clipping pass records the rows of cells of every primitive as runs (first cell, cell
     // count), in visiting order, and counts them by a difference array along each row (+1 at the
     // run's first cell, -1 past its last), then prefix sums along x; the fill replays the runs.
-    // Clipping is most of the work, and a run (8 bytes) is written and read once instead.
+    // Clipping is most of the work, and a run (5 bytes) is written and read once instead.
     const int nx = g.res[0];
     std::uint32_t* cursor = out.offsets.data();
     auto rows_of = [&](std::size_t p, auto&& row) {
@@ -297,40 +299,54 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
       }
     };
     // A run: its first cell and its cell count; a row of more than 255 cells is several runs.
+    // The runs of the bounding boxes' rows bound them; the arrays reserve that bound (address
+    // space: only the runs written are touched), capped at 32 per primitive plus one per cell.
+    // Past the cap (large triangles, or references beyond 32 bits, which are reported after
+    // counting) recording stops and the fill clips the primitives again.
+    constexpr std::uint32_t kLongestRun = 255;
     BuildArray<std::uint32_t> run_first;
     BuildArray<std::uint8_t> run_count;
-    // The rows of the bounding boxes bound the runs but for long rows: reserved (address space; only
-    // the runs written are touched) up to a cap, so that large triangles do not reserve far more
-    // than they write; beyond it the arrays grow.
-    std::size_t bbox_rows_total = 0;
+    std::size_t bbox_runs_total = 0;
     for (std::size_t p = 0; p < n; ++p) {
       const CellRange r = range_of(p);
-      bbox_rows_total += std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+      bbox_runs_total += std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1) *
+                         ((std::size_t(r.hi[0] - r.lo[0]) + kLongestRun) / kLongestRun);
     }
-    const std::size_t capacity = std::min(bbox_rows_total, 64 * n + cells);
+    const std::size_t capacity = std::min(bbox_runs_total, 32 * n + cells);
     run_first.reserve(capacity);
     run_count.reserve(capacity);
     BuildArray<std::uint32_t> runs_end(n);  // primitive p's runs: [runs_end[p-1] (0 for p = 0), runs_end[p])
+    bool recorded = true;
     std::size_t total = 0;
     for (std::size_t p = 0; p < n; ++p) {
       rows_of(p, [&](int j, int k, int ilo, int ihi) {
         const std::uint32_t first = g.index(ilo, j, k), count = std::uint32_t(ihi - ilo + 1);
         ++cursor[first];
         if (ihi + 1 < nx) --cursor[first + count];
-        for (std::uint32_t at = 0; at < count; at += 255) {
-          run_first.push_back(first + at);
-          run_count.push_back(static_cast<std::uint8_t>(std::min(count - at, 255u)));
-        }
         total += count;
+        for (std::uint32_t at = 0; recorded && at < count; at += kLongestRun) {
+          if (run_first.size() == capacity) {
+            recorded = false;
+            run_first = {};
+            run_count = {};
+            runs_end = {};
+            break;
+          }
+          run_first.push_back(first + at);
+          run_count.push_back(static_cast<std::uint8_t>(std::min(count - at, kLongestRun)));
+        }
       });
-      check_ref_count(total);  // also bounds the runs (each holds a reference) before they grow further
-      runs_end[p] = static_cast<std::uint32_t>(run_first.size());
+      if (recorded) runs_end[p] = static_cast<std::uint32_t>(run_first.size());
     }
+    check_ref_count(total);
     for (std::size_t base = 0; base < cells; base += std::size_t(nx))
       for (std::size_t i = 1; i < std::size_t(nx); ++i) cursor[base + i] += cursor[base + i - 1];
-    fill(total, [&](std::size_t p, auto&& run) {
-      for (std::uint32_t r = p == 0 ? 0 : runs_end[p - 1]; r < runs_end[p]; ++r) run(run_first[r], run_count[r]);
-    });
+    if (recorded)
+      fill(total, [&](std::size_t p, auto&& run) {
+        for (std::uint32_t r = p == 0 ? 0 : runs_end[p - 1]; r < runs_end[p]; ++r) run(run_first[r], run_count[r]);
+      });
+    else
+      fill(total, as_runs(rows_of));
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.
