@@ -39,21 +39,21 @@ double first_touch_seconds(std::size_t count, bool as_the_build) {
   double best = 1e300;
   [[maybe_unused]] static volatile std::uint32_t sink;  // a value read back keeps the writes observable
   for (int rep = 0; rep < 3; ++rep) {
-    if (as_the_build) {
-      BuildArray<std::uint32_t> refs;
-      best = std::min(best, thread_cpu_seconds_of([&] {
-        refs.resize(count);  // default-initialised: not zeroed by the allocator
-        for (std::size_t i = 0; i < count; ++i) refs[i] = static_cast<std::uint32_t>(i);
-      }));
-      if (count > 0) sink = refs[count / 2];
-    } else {
-      std::unique_ptr<std::uint32_t[]> refs;
-      best = std::min(best, thread_cpu_seconds_of([&] {
-        refs.reset(new std::uint32_t[count]);  // default-initialised: not zeroed by the allocator
-        for (std::size_t i = 0; i < count; ++i) refs[i] = static_cast<std::uint32_t>(i);
-      }));
-      if (count > 0) sink = refs[count / 2];
-    }
+    BuildArray<std::uint32_t> build_refs;
+    std::unique_ptr<std::uint32_t[]> plain_refs;
+    std::uint32_t* refs = nullptr;
+    best = std::min(best, thread_cpu_seconds_of([&] {
+      // default-initialised either way: not zeroed by the allocator
+      if (as_the_build) {
+        build_refs.resize(count);
+        refs = build_refs.data();
+      } else {
+        plain_refs.reset(new std::uint32_t[count]);
+        refs = plain_refs.get();
+      }
+      for (std::size_t i = 0; i < count; ++i) refs[i] = static_cast<std::uint32_t>(i);
+    }));
+    if (count > 0) sink = refs[count / 2];
   }
   return best;
 }
