@@ -3,9 +3,15 @@
 /// `resize` default-initialises the elements, so a trivially constructible array is not zeroed
 /// (a pass over memory that also takes the page faults) before the build overwrites it.
 /// Elements constructed with arguments (`assign(n, 0)`, `push_back`) are initialised as usual.
+/// Every allocation is advised to transparent huge pages (huge_pages.h; arrays from 4 MiB on)
+/// before anything touches it: on this VM a 4 KiB page fault costs ~3.5 ms per MB first
+/// written, a 2 MiB one a small fraction of that (exp_grids, "Performance goals").
+#include <cstddef>
 #include <memory>
 #include <utility>
 #include <vector>
+
+#include "accel/common/huge_pages.h"
 
 namespace raylab {
 
@@ -18,6 +24,12 @@ struct BuildArrayAllocator : std::allocator<T> {
   BuildArrayAllocator() = default;
   template <class U>
   BuildArrayAllocator(const BuildArrayAllocator<U>&) noexcept {}
+
+  T* allocate(std::size_t n) {
+    T* p = std::allocator<T>::allocate(n);
+    advise_huge_pages(p, n * sizeof(T));
+    return p;
+  }
 
   template <class U>
   void construct(U* p) noexcept(noexcept(U())) {

@@ -4,7 +4,7 @@
 
 namespace raylab {
 
-CellTriangles copy_cell_triangles(const Scene& scene, std::vector<std::uint32_t> prim_of) {
+CellTriangles copy_cell_triangles(const Scene& scene, BuildArray<std::uint32_t> prim_of) {
   CellTriangles out;
   out.prim_of = std::move(prim_of);
   out.tris.reserve(out.prim_of.size());
@@ -19,7 +19,7 @@ CellTriangles copy_cell_triangles(const Scene& scene, std::vector<std::uint32_t>
 CellTriangles renumber_cell_triangles(const Scene& scene, std::uint32_t* refs, std::size_t n) {
   if (!scene.spheres.empty()) return {};
   std::vector<std::uint32_t> local_of(scene.primitive_count(), kInvalidId);
-  std::vector<std::uint32_t> prim_of;
+  BuildArray<std::uint32_t> prim_of;
   for (std::size_t i = 0; i < n; ++i) {
     std::uint32_t& r = refs[i];
     std::uint32_t& local = local_of[r];

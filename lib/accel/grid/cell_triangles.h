@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "accel/common/build_array_allocator.h"
 #include "geometry/vec3.h"
 #include "scene/scene.h"
 
@@ -16,15 +17,15 @@ struct CellTriangles {
   struct Triangle {
     Vec3f v0, v1, v2;
   };
-  std::vector<Triangle> tris;          ///< by local id
-  std::vector<std::uint32_t> prim_of;  ///< local id → the scene's primitive id
+  BuildArray<Triangle> tris;          ///< by local id
+  BuildArray<std::uint32_t> prim_of;  ///< local id → the scene's primitive id
 
   std::size_t bytes() const { return tris.size() * sizeof(Triangle) + prim_of.size() * sizeof(std::uint32_t); }
 };
 static_assert(sizeof(CellTriangles::Triangle) == 36);
 
 /// The triangles of `scene` (which holds no sphere) with local ids 0, 1, ... in the order of `prim_of`.
-CellTriangles copy_cell_triangles(const Scene& scene, std::vector<std::uint32_t> prim_of);
+CellTriangles copy_cell_triangles(const Scene& scene, BuildArray<std::uint32_t> prim_of);
 
 /// Renumbers the primitive ids in refs[0, n) to local ids, 0, 1, ... in order of first
 /// appearance, and returns the copied triangles. A scene that holds a sphere is left as it is (the

@@ -147,9 +147,8 @@ void check_ref_count(std::size_t total) {
 /// With `copy` (a scene of triangles only), also writes the triangles in visit order to it,
 /// scattered while the scene is read in input order (sequential reads, independent writes).
 template <class PrimAt>
-std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
-                                       float margin, std::uint32_t* counts,
-                                       std::vector<CellTriangles::Triangle>* copy) {
+BuildArray<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeometry& g,
+                                      float margin, std::uint32_t* counts, BuildArray<CellTriangles::Triangle>* copy) {
   BuildArray<std::uint32_t> key(n);
   for (std::size_t p = 0; p < n; ++p) {
     const Bounds3f b = prim_bounds(scene, prim_at(p));
@@ -158,7 +157,7 @@ std::vector<std::uint32_t> visit_order(const Scene& scene, std::size_t n, PrimAt
   }
   const std::size_t cells = g.cell_count();
   for (std::size_t c = 1; c < cells; ++c) counts[c] += counts[c - 1];
-  std::vector<std::uint32_t> order(n);
+  BuildArray<std::uint32_t> order(n);
   if (copy) {
     copy->resize(n);
     const auto& v = scene.mesh.vertices;
@@ -183,13 +182,13 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   out.offsets.assign(cells + 1, 0);
   const bool local = ids == CellRefIds::visit_order;
   // The triangles in visit order, copied once: the reference ids of a local build, and
-  // sequential reads for the passes (clipping reads every triangle twice).
+  // sequential reads for the passes (clipping reads every triangle again).
   const bool gather = scene.spheres.empty() && (local || placement == GridPlacement::clipped);
   CellTriangles visit_tris;
-  std::vector<std::uint32_t> order =
+  BuildArray<std::uint32_t> order =
       visit_order(scene, n, prim_at, g, margin, out.offsets.data(), gather ? &visit_tris.tris : nullptr);
   if (gather) visit_tris.prim_of = std::move(order);
-  const std::vector<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
+  const BuildArray<std::uint32_t>& prims = gather ? visit_tris.prim_of : order;
   // The cell range of the p-th primitive visited, from its copied triangle when there is one.
   auto range_of = [&](std::size_t p) {
     if (!gather) return cell_range(g, prim_bounds(scene, prims[p]), margin);
@@ -207,8 +206,9 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
   };
   // The fill of a two-pass placement whose counts are in offsets[c]: an inclusive prefix sum
   // makes offsets[c] the end of cell c, and filling backwards (last primitive first) over the
-  // rows rows_of(p, row) reports leaves it at the start, with every cell's list in visiting order.
-  auto fill = [&](std::size_t total, auto&& rows_of) {
+  // runs of cells runs_of(p, run) reports for primitive p, run(first cell, cell count), leaves it
+  // at the start, with every cell's list in visiting order.
+  auto fill = [&](std::size_t total, auto&& runs_of) {
     std::uint32_t* cursor = out.offsets.data();
     for (std::size_t c = 1; c < cells; ++c) cursor[c] += cursor[c - 1];
     out.offsets[cells] = static_cast<std::uint32_t>(total);
@@ -216,12 +216,18 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     std::uint32_t* refs = out.refs.data();
     for (std::size_t p = n; p-- > 0;) {
       const std::uint32_t ref = local ? static_cast<std::uint32_t>(p) : prims[p];
-      rows_of(p, [&](int j, int k, int ilo, int ihi) {
-        std::uint32_t* row = cursor + g.index(0, j, k);
-        for (int i = ilo; i <= ihi; ++i) refs[--row[i]] = ref;
+      runs_of(p, [&](std::uint32_t first, std::uint32_t count) {
+        std::uint32_t* run = cursor + first;
+        for (std::uint32_t i = 0; i < count; ++i) refs[--run[i]] = ref;
       });
     }
     if (local) out.triangles = std::move(visit_tris);
+  };
+  // The rows rows_of(p, row) reports, as runs.
+  auto as_runs = [&](auto& rows_of) {
+    return [&](std::size_t p, auto&& run) {
+      rows_of(p, [&](int j, int k, int ilo, int ihi) { run(g.index(ilo, j, k), std::uint32_t(ihi - ilo + 1)); });
+    };
   };
   std::uint32_t* count = out.offsets.data() + 1;
   if (placement == GridPlacement::bbox) {
@@ -267,12 +273,14 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
           }
       }
     }
-    fill(total, bbox_rows);
+    fill(total, as_runs(bbox_rows));
     return out;
   }
   if (placement == GridPlacement::clipped) {
-    // Two passes over the clipped rows: counts by a difference array along each row (+1 at the
-    // row range's first cell, -1 past its last) and prefix sums along x, then the fill.
+    // One clipping pass records the rows of cells of every primitive as runs (first cell, cell
+    // count), in visiting order, and counts them by a difference array along each row (+1 at the
+    // run's first cell, -1 past its last), then prefix sums along x; the fill replays the runs.
+    // Clipping is most of the work, and a run (5 bytes) is written and read once instead.
     const int nx = g.res[0];
     std::uint32_t* cursor = out.offsets.data();
     auto rows_of = [&](std::size_t p, auto&& row) {
@@ -290,18 +298,55 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
         for_each_clipped_row(g, tri, r, margin, row);
       }
     };
+    // A run: its first cell and its cell count; a row of more than 255 cells is several runs.
+    // The runs of the bounding boxes' rows bound them; the arrays reserve that bound (address
+    // space: only the runs written are touched), capped at 32 per primitive plus one per cell.
+    // Past the cap (large triangles, or references beyond 32 bits, which are reported after
+    // counting) recording stops and the fill clips the primitives again.
+    constexpr std::uint32_t kLongestRun = 255;
+    BuildArray<std::uint32_t> run_first;
+    BuildArray<std::uint8_t> run_count;
+    std::size_t bbox_runs_total = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      const CellRange r = range_of(p);
+      bbox_runs_total += std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1) *
+                         ((std::size_t(r.hi[0] - r.lo[0]) + kLongestRun) / kLongestRun);
+    }
+    const std::size_t capacity = std::min(bbox_runs_total, 32 * n + cells);
+    run_first.reserve(capacity);
+    run_count.reserve(capacity);
+    BuildArray<std::uint32_t> runs_end(n);  // primitive p's runs: [runs_end[p-1] (0 for p = 0), runs_end[p])
+    bool recorded = true;
     std::size_t total = 0;
-    for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t p = 0; p < n; ++p) {
       rows_of(p, [&](int j, int k, int ilo, int ihi) {
-        std::uint32_t* cells_row = cursor + g.index(0, j, k);
-        ++cells_row[ilo];
-        if (ihi + 1 < nx) --cells_row[ihi + 1];
-        total += std::size_t(ihi - ilo + 1);
+        const std::uint32_t first = g.index(ilo, j, k), count = std::uint32_t(ihi - ilo + 1);
+        ++cursor[first];
+        if (ihi + 1 < nx) --cursor[first + count];
+        total += count;
+        for (std::uint32_t at = 0; recorded && at < count; at += kLongestRun) {
+          if (run_first.size() == capacity) {
+            recorded = false;
+            run_first = {};
+            run_count = {};
+            runs_end = {};
+            break;
+          }
+          run_first.push_back(first + at);
+          run_count.push_back(static_cast<std::uint8_t>(std::min(count - at, kLongestRun)));
+        }
       });
+      if (recorded) runs_end[p] = static_cast<std::uint32_t>(run_first.size());
+    }
     check_ref_count(total);
     for (std::size_t base = 0; base < cells; base += std::size_t(nx))
       for (std::size_t i = 1; i < std::size_t(nx); ++i) cursor[base + i] += cursor[base + i - 1];
-    fill(total, rows_of);
+    if (recorded)
+      fill(total, [&](std::size_t p, auto&& run) {
+        for (std::uint32_t r = p == 0 ? 0 : runs_end[p - 1]; r < runs_end[p]; ++r) run(run_first[r], run_count[r]);
+      });
+    else
+      fill(total, as_runs(rows_of));
     return out;
   }
   // exact: the decisions are made once into (cell, prim) pairs, then counting-sorted.

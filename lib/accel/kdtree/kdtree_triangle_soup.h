@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "accel/bvh/packed_triangles.h"
-#include "accel/kdtree/huge_pages.h"
+#include "accel/common/huge_pages.h"
 #include "accel/kdtree/kdtree_node_lines.h"
 #include "geometry/vec3.h"
 #include "scene/scene.h"
