@@ -5,7 +5,7 @@
 #include <span>
 #include <string>
 
-#include "accel/kdtree/huge_pages.h"
+#include "accel/common/huge_pages.h"
 #include "accel/kdtree/sah_sweep_events.h"
 #include "accel/kdtree/sah_sweep_sort.h"
 #include "geometry/input_error.h"

@@ -18,7 +18,7 @@
 #include <span>
 #include <vector>
 
-#include "accel/kdtree/huge_pages.h"
+#include "accel/common/huge_pages.h"
 #include "accel/kdtree/sah_cost.h"
 #include "accel/kdtree/split_clipping.h"
 
