@@ -68,6 +68,9 @@ BvhConfig read_bvh_config(SpecReader& r) {
   // their binary tree is built with costlier traversal, i.e. fuller leaves (measured on the CGAL
   // meshes: c_trav = 3 is ~10% faster than 1 at width 8 and halves the packed-leaf memory).
   read_sah_constants(r, c.width == 2 ? "bvh" : "bvh" + std::to_string(c.width), c.width == 2 ? 1.0 : 3.0, 1.0, c.cost);
+  // Wide trees' leaves are tested a packet at a time, so their SAH counts whole packets (as
+  // Embree's counts blocks of 4 triangles).
+  c.cost.leaf_block = c.width == 2 ? 1u : static_cast<unsigned>(kPacketWidth);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
   c.robust = r.get_bool("robust", true);
