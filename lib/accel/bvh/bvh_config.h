@@ -38,7 +38,8 @@ struct BvhConfig {
   /// tree collapsed from the binary one, 4 or 8 (SIMD box tests).
   int width = 2;
   /// The builder makes a leaf of at most this many primitives (SAH may stop earlier); the spec
-  /// default is 4 at width 2 and 8 (two triangle packets) at width 4 or 8.
+  /// default is 4 at width 2, 16 (four triangle packets) for the SAH builders at width 8, and 8
+  /// (two packets) otherwise.
   int max_leaf_size = 4;
   /// The most SAH bins per axis (binned and spatial builders): small nodes use fewer (4 + n/20,
   /// as Embree), and spatial splits use half as many.
