@@ -312,5 +312,31 @@ TEST(BvhBuild, BuildsAreDeterministicAcrossThreadCountsAndRuns) {
   }
 }
 
+TEST(BvhBuild, SahCountsLeavesInWholeBlocks) {
+  EXPECT_EQ(bvh_leaf_units(1, 4), 4u);
+  EXPECT_EQ(bvh_leaf_units(4, 4), 4u);
+  EXPECT_EQ(bvh_leaf_units(5, 4), 8u);
+  EXPECT_EQ(bvh_leaf_units(8, 4), 8u);
+  EXPECT_EQ(bvh_leaf_units(0, 4), 0u);
+  EXPECT_EQ(bvh_leaf_units(7, 1), 7u);
+  // Two pairs of unit boxes 10 apart (half areas: node 23, each pair 3), c_trav = 3. Counting
+  // primitives, the split costs 3 + (2·3 + 2·3)/23 = 3.52 < 4, the leaf's cost; counting blocks
+  // of 4, it costs 3 + (4·3 + 4·3)/23 = 4.04 > 4: one leaf.
+  const Bounds3f near_box(Vec3f(0.0f), Vec3f(1.0f)), far_box(Vec3f(10.0f, 0.0f, 0.0f), Vec3f(11.0f, 1.0f, 1.0f));
+  const std::vector<Bounds3f> boxes = {near_box, far_box, near_box, far_box};
+  for (BvhBuilder b : {BvhBuilder::binned, BvhBuilder::sweep}) {
+    BvhConfig by_prims = config_for(b);
+    by_prims.max_leaf_size = 8;
+    by_prims.cost.c_trav = 3.0;
+    BvhConfig by_blocks = by_prims;
+    by_blocks.cost.leaf_block = 4;
+    EXPECT_EQ(build_bvh_over_boxes(boxes, by_prims).nodes.size(), 3u);
+    const Bvh2 leaf = build_bvh_over_boxes(boxes, by_blocks);
+    ASSERT_EQ(leaf.nodes.size(), 1u);
+    EXPECT_EQ(leaf.nodes[0].count, 4u);
+    EXPECT_DOUBLE_EQ(bvh_sah_cost(leaf, by_blocks.cost), 4.0);
+  }
+}
+
 }  // namespace
 }  // namespace raylab

@@ -34,7 +34,7 @@ const std::vector<std::string> kWidths = {"2", "4", "8"};
 std::vector<ParamDoc> bvh_params() {
   return {{"builder", "binned",
            "midpoint | median | sweep (full-sweep SAH, all axes) | binned (binned SAH, TBB) | spatial (SBVH)"},
-          {"leaf_size", "4 (width=2), 8 (width=4|8)", "largest leaf, in [1, 64]"},
+          {"leaf_size", "4 (width=2), 16 (width=8, SAH builders), 8 (otherwise)", "largest leaf, in [1, 64]"},
           {"bins", "32", "SAH bins per axis, in [2, 256]"},
           {"c_trav", "1 (width=2), 3 (width=4|8)", "SAH traversal cost"},
           {"c_isect", "1", "SAH intersection cost"},
@@ -61,13 +61,20 @@ BvhConfig read_bvh_config(SpecReader& r) {
   // Wide trees test leaves a packet of kPacketWidth triangles at a time: leaves of up to two
   // packets cut node visits on thin, overlapping geometry (bench_bvh, against embree-robust:
   // walls diffuse 0.86 -> 0.95, shadow 0.82 -> 0.98; grass 0.81-0.85 -> 0.90-1.01; CGAL meshes
-  // within -3%..+3%).
-  c.max_leaf_size = static_cast<int>(r.get_int("leaf_size", c.width == 2 ? 4 : 8, 1, 64));
+  // within -3%..+3%). The SAH builders at width 8 may stop at up to four packets, where the SAH
+  // finds a leaf cheaper (bench_bvh, 7 scenes, 2 runs, 8 -> 16: diffuse +2-4% robust, +4-7%
+  // robust=off; shadow +9-13%; primary -1%..+3%; 24 and 32 measured as 16).
+  const bool sah = c.builder == BvhBuilder::sweep || c.builder == BvhBuilder::binned || c.builder == BvhBuilder::spatial;
+  const int default_leaf = c.width == 2 ? 4 : c.width == 8 && sah ? 16 : 8;
+  c.max_leaf_size = static_cast<int>(r.get_int("leaf_size", default_leaf, 1, 64));
   c.bins = static_cast<int>(r.get_int("bins", 32, 2, 256));
   // Wide trees test a packet of kPacketWidth triangles for about the price of one box test, so
   // their binary tree is built with costlier traversal, i.e. fuller leaves (measured on the CGAL
   // meshes: c_trav = 3 is ~10% faster than 1 at width 8 and halves the packed-leaf memory).
   read_sah_constants(r, c.width == 2 ? "bvh" : "bvh" + std::to_string(c.width), c.width == 2 ? 1.0 : 3.0, 1.0, c.cost);
+  // Wide trees' leaves are tested a packet at a time, so their SAH counts whole packets (as
+  // Embree's counts blocks of 4 triangles).
+  c.cost.leaf_block = c.width == 2 ? 1u : static_cast<unsigned>(kPacketWidth);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
   c.robust = r.get_bool("robust", true);

@@ -44,11 +44,11 @@ class BinnedSahBuilder {
       if (small) return make_leaf(out, slot, begin, n);
       mid = bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
     } else if (n <= kBvhSmallSweepMax) {
-      const BvhSweepSplit s = bvh_best_small_split(refs_ + begin, n);
+      const BvhSweepSplit s = bvh_best_small_split(refs_ + begin, n, config_.cost.leaf_block);
       const double half_area = bvh_half_area(box);
       const double split_cost = s.axis >= 0 && half_area > 0.0 ? bvh_split_cost(config_.cost, s.cost, half_area)
                                                                  : std::numeric_limits<double>::infinity();
-      if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n)))
+      if (small && !(split_cost < bvh_leaf_cost(config_.cost, n)))
         return make_leaf(out, slot, begin, n);
       mid = s.axis >= 0 ? bvh_partition_small(refs_ + begin, n, s, left, right)
                         : bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
@@ -58,7 +58,7 @@ class BinnedSahBuilder {
       const double half_area = bvh_half_area(box);
       const double split_cost = s.axis >= 0 && half_area > 0.0 ? bvh_split_cost(config_.cost, s.cost, half_area)
                                                                  : std::numeric_limits<double>::infinity();
-      if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n)))
+      if (small && !(split_cost < bvh_leaf_cost(config_.cost, n)))
         return make_leaf(out, slot, begin, n);
       mid = s.axis >= 0 ? bvh_partition_object(refs_ + begin, n, map, s.axis, s.bin, left, right)
                         : bvh_partition_median(refs_ + begin, n, centroid_axis, left, right);
@@ -81,7 +81,7 @@ class BinnedSahBuilder {
       BvhObjectBins bins;
       bins.reset(map.bins);
       bins.add(refs_ + begin, n, map);
-      return bvh_best_object_split(bins);
+      return bvh_best_object_split(bins, config_.cost.leaf_block);
     }
     const std::size_t chunks = (n + kBinChunk - 1) / kBinChunk;
     auto bins = std::make_unique<BvhObjectBins[]>(chunks);
@@ -93,7 +93,7 @@ class BinnedSahBuilder {
       }
     });
     for (std::size_t c = 1; c < chunks; ++c) bins[0].merge(bins[c]);
-    return bvh_best_object_split(bins[0]);
+    return bvh_best_object_split(bins[0], config_.cost.leaf_block);
   }
 
   BvhBuildRef* refs_;

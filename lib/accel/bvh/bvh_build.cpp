@@ -139,7 +139,7 @@ double bvh_sah_cost(const Bvh2& bvh, const BvhSahCost& cost) {
   double total = 0.0;
   for (const Bvh2Node& n : bvh.nodes) {
     const double a = surface_area_d(n.box) / root;
-    total += n.is_leaf() ? cost.c_isect * static_cast<double>(n.count) * a : cost.c_trav * a;
+    total += n.is_leaf() ? cost.c_isect * bvh_leaf_units(n.count, cost.leaf_block) * a : cost.c_trav * a;
   }
   return total;
 }

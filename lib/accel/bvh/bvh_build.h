@@ -19,7 +19,7 @@ Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& c
 Bvh2 build_bvh(const Scene& scene, const BvhConfig& config);
 
 /// The SAH cost of a finished tree (bvh_config.h's BvhSahCost), with areas relative to the
-/// root's: Σ_interior c_trav·SA(n)/SA(root) + Σ_leaves c_isect·N(n)·SA(n)/SA(root).
+/// root's: Σ_interior c_trav·SA(n)/SA(root) + Σ_leaves c_isect·N(n)·SA(n)/SA(root), N in whole leaf blocks.
 double bvh_sah_cost(const Bvh2& bvh, const BvhSahCost& cost);
 
 /// Depth of the deepest leaf (the root has depth 0).

@@ -170,8 +170,9 @@ struct BvhObjectSplit {
   Bounds3f left, right;  ///< child boxes
 };
 
-/// Sweeps the bins of every axis; candidates with an empty side are skipped.
-inline BvhObjectSplit bvh_best_object_split(const BvhObjectBins& bins) {
+/// Sweeps the bins of every axis; candidates with an empty side are skipped. Counts are in
+/// whole blocks of `block` (bvh_leaf_units).
+inline BvhObjectSplit bvh_best_object_split(const BvhObjectBins& bins, unsigned block) {
   BvhObjectSplit best;
   const int n = bins.bins;
   float right_area[kBvhMaxBins];
@@ -192,8 +193,8 @@ inline BvhObjectSplit bvh_best_object_split(const BvhObjectBins& bins) {
       hi = _mm_max_ps(hi, bins.box[a][b].hi);
       left += bins.count[a][b];
       if (left == 0 || left == total) continue;
-      const float cost = bvh_half_area(lo, hi) * static_cast<float>(left) +
-                         right_area[b + 1] * static_cast<float>(total - left);
+      const float cost = bvh_half_area(lo, hi) * static_cast<float>(bvh_leaf_units(left, block)) +
+                         right_area[b + 1] * static_cast<float>(bvh_leaf_units(total - left, block));
       if (cost < best.cost) {
         best.cost = cost;
         best.axis = a;
@@ -216,9 +217,14 @@ inline BvhObjectSplit bvh_best_object_split(const BvhObjectBins& bins) {
 }
 
 /// The SAH cost (bvh_config.h) of a split of cost N_A·S_A + N_B·S_B (half areas) in a node of
-/// half area `half_area`; the leaf it competes with costs c_isect·N.
+/// half area `half_area`; the leaf it competes with costs bvh_leaf_cost.
 inline double bvh_split_cost(const BvhSahCost& c, double split_cost, double half_area) {
   return c.c_trav + c.c_isect * split_cost / half_area;
+}
+
+/// The SAH cost of a leaf of n primitives, c_isect·N in whole blocks.
+inline double bvh_leaf_cost(const BvhSahCost& c, std::size_t n) {
+  return c.c_isect * static_cast<double>(bvh_leaf_units(n, c.leaf_block));
 }
 
 /// Partition of refs[0, n) into [0, m) with bin < split_bin on `axis` and [m, n), accumulating
@@ -277,7 +283,7 @@ inline bool bvh_centroid_less(const BvhBuildRef& x, const BvhBuildRef& y, int ax
   return cx < cy || (cx == cy && x.id < y.id);
 }
 
-inline BvhSweepSplit bvh_best_small_split(const BvhBuildRef* refs, std::size_t n) {
+inline BvhSweepSplit bvh_best_small_split(const BvhBuildRef* refs, std::size_t n, unsigned block) {
   BvhSweepSplit best;
   std::uint8_t order[kBvhSmallSweepMax];
   float key[kBvhSmallSweepMax];
@@ -302,7 +308,8 @@ inline BvhSweepSplit bvh_best_small_split(const BvhBuildRef* refs, std::size_t n
     acc = BvhRangeBounds();
     for (std::size_t i = 1; i < n; ++i) {
       acc.extend(refs[order[i - 1]]);
-      const float cost = bvh_half_area(acc.lo, acc.hi) * static_cast<float>(i) + right_area[i] * static_cast<float>(n - i);
+      const float cost = bvh_half_area(acc.lo, acc.hi) * static_cast<float>(bvh_leaf_units(i, block)) +
+                         right_area[i] * static_cast<float>(bvh_leaf_units(n - i, block));
       if (cost < best.cost) best = {a, i, cost};
     }
   }

@@ -69,7 +69,7 @@ class SpatialBuilder {
       BvhSweepSplit sweep;
       BvhRangeBounds small_left, small_right;
       if (n <= kBvhSmallSweepMax) {
-        sweep = bvh_best_small_split(refs, n);
+        sweep = bvh_best_small_split(refs, n, config_.cost.leaf_block);
         object.cost = sweep.cost;
         if (sweep.axis >= 0) {  // partitioned now; a spatial split or a leaf may still follow
           bvh_partition_small(refs, n, sweep, small_left, small_right);
@@ -80,7 +80,7 @@ class SpatialBuilder {
         BvhObjectBins bins;
         bins.reset(map.bins);
         bins.add(refs, n, map);
-        object = bvh_best_object_split(bins);
+        object = bvh_best_object_split(bins, config_.cost.leaf_block);
       }
       SpatialSplit spatial;
       if (capacity > n && (object.left.empty() || bvh_half_area(intersect(object.left, object.right)) > min_overlap_))
@@ -90,7 +90,7 @@ class SpatialBuilder {
       const double split_cost = half_area > 0.0 && best < std::numeric_limits<float>::infinity()
                                     ? bvh_split_cost(config_.cost, best, half_area)
                                     : std::numeric_limits<double>::infinity();
-      if (small && !(split_cost < config_.cost.c_isect * static_cast<double>(n))) return make_leaf(out, slot, begin, n);
+      if (small && !(split_cost < bvh_leaf_cost(config_.cost, n))) return make_leaf(out, slot, begin, n);
       const bool spatial_applied =
           spatial.cost < object.cost && apply_spatial_split(refs, n, capacity, spatial, left, right, n_left, n_right);
       if (!spatial_applied) {
@@ -299,7 +299,8 @@ class SpatialBuilder {
         count += entry[a][k - 1];
         const std::size_t nl = count, nr = right_count[k];
         if (nl == 0 || nr == 0 || nl + nr > n + budget) continue;
-        const float cost = bvh_half_area(lo, hi) * static_cast<float>(nl) + right_area[k] * static_cast<float>(nr);
+        const float cost = bvh_half_area(lo, hi) * static_cast<float>(bvh_leaf_units(nl, config_.cost.leaf_block)) +
+                           right_area[k] * static_cast<float>(bvh_leaf_units(nr, config_.cost.leaf_block));
         if (cost < best.cost) {
           best.cost = cost;
           best.axis = a;

@@ -58,7 +58,8 @@ class SweepSahBuilder {
     acc = Bounds3f();
     for (std::size_t i = 1; i < n; ++i) {
       acc.extend(boxes_[ids[i - 1]]);
-      const double cost = double(bvh_half_area(acc)) * double(i) + right_area_[i] * double(n - i);
+      const double cost = double(bvh_half_area(acc)) * double(bvh_leaf_units(i, config_.cost.leaf_block)) +
+                          right_area_[i] * double(bvh_leaf_units(n - i, config_.cost.leaf_block));
       if (cost < best.cost) best = {axis, i, cost};
     }
   }
@@ -81,7 +82,7 @@ class SweepSahBuilder {
       if (small) return make_leaf(out, slot, begin, n);
       best = {box.largest_axis(), n / 2, 0.0};
     } else if (small && !(bvh_split_cost(config_.cost, best.cost, half_area) <
-                          config_.cost.c_isect * static_cast<double>(n))) {
+                          bvh_leaf_cost(config_.cost, n))) {
       return make_leaf(out, slot, begin, n);
     }
     const std::uint32_t* chosen = order_[best.axis].data() + begin;

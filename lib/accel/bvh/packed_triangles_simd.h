@@ -294,7 +294,7 @@ inline constexpr bool kPairedPackets =
 /// Offers a leaf's `count` packets from `packets` (pack_leaf's order: triangle packets, then
 /// sphere packets, tested scalar) to Kernel in order; true when one of them became the closest
 /// hit (with kAnyHit: at the first hit). Two consecutive triangle packets go as one 8-lane test
-/// where the kernel has one (the default leaf_size 8 makes most leaves two packets).
+/// where the kernel has one (most leaves of the wide trees' default leaf sizes are 2 or 4 packets).
 template <class Kernel, bool kAnyHit, class Counters>
 inline bool intersect_packed_leaf(const Scene& scene, typename Kernel::Context& ctx,
                                   const typename PacketKernel<Kernel>::Ray& packet_ray, const TrianglePacket* packets,
