@@ -15,7 +15,7 @@
 
 #include <memory>
 
-#include "accel/bvh/bvh_build_memory.h"
+#include "accel/common/huge_pages.h"
 #include "accel/bvh/bvh_builders.h"
 #include "accel/bvh/bvh_object_binning.h"
 #include "accel/bvh/bvh_subtree.h"
@@ -105,7 +105,7 @@ template <class BoxOf>
 Bvh2 binned_sah(std::size_t n, BoxOf&& box_of, const BvhConfig& config) {
   if (n == 0) return Bvh2{};
   std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[n]);
-  bvh_advise_huge_pages(refs.get(), n * sizeof(BvhBuildRef));
+  advise_huge_pages(refs.get(), n * sizeof(BvhBuildRef));
   BvhSubtree root;
   tbb::task_arena arena(resolve_thread_count(config.threads));
   arena.execute([&] {

@@ -24,7 +24,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "accel/bvh/bvh_build_memory.h"
+#include "accel/common/huge_pages.h"
 #include "accel/bvh/bvh_builders.h"
 #include "accel/bvh/bvh_object_binning.h"
 #include "accel/bvh/bvh_subtree.h"
@@ -414,7 +414,7 @@ Bvh2 build_bvh_spatial(const Scene& scene, const BvhConfig& config) {
     throw std::length_error("build_bvh: SBVH reference capacity exceeds 2^32 - 1");
   // Uninitialised: the pages past N are touched only where spatial splits use them.
   std::unique_ptr<BvhBuildRef[]> refs(new BvhBuildRef[capacity]);
-  bvh_advise_huge_pages(refs.get(), capacity * sizeof(BvhBuildRef));
+  advise_huge_pages(refs.get(), capacity * sizeof(BvhBuildRef));
   BvhRangeBounds bounds;
   for (std::size_t i = 0; i < n; ++i) {
     refs[i] = BvhBuildRef::make(bvh_build_box(scene.primitive_bounds(static_cast<unsigned>(i))),

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "accel/bvh/bvh_build_memory.h"
+#include "accel/common/huge_pages.h"
 #include "accel/bvh/bvh_node.h"
 
 namespace raylab {
@@ -63,7 +63,7 @@ Bvh2 bvh_concatenate(const BvhSubtree& root, std::size_t primitive_count, RefId&
     return c;
   };
   bvh.nodes.reserve(count(count, root) + 1);
-  bvh_advise_huge_pages(bvh.nodes.data(), bvh.nodes.capacity() * sizeof(Bvh2Node));
+  advise_huge_pages(bvh.nodes.data(), bvh.nodes.capacity() * sizeof(Bvh2Node));
   bvh.nodes.resize(1);
   auto place = [&bvh](auto&& self, const BvhSubtree& s, std::uint32_t root_slot) -> void {
     const auto base = static_cast<std::uint32_t>(bvh.nodes.size());
@@ -80,7 +80,7 @@ Bvh2 bvh_concatenate(const BvhSubtree& root, std::size_t primitive_count, RefId&
   std::size_t refs = 0;
   for (const Bvh2Node& n : bvh.nodes) refs += n.count;
   bvh.prims.reserve(refs);
-  bvh_advise_huge_pages(bvh.prims.data(), refs * sizeof(std::uint32_t));
+  advise_huge_pages(bvh.prims.data(), refs * sizeof(std::uint32_t));
   for (Bvh2Node& n : bvh.nodes) {
     if (!n.is_leaf()) continue;
     const auto first = static_cast<std::uint32_t>(bvh.prims.size());

@@ -1,6 +1,6 @@
 #include "accel/bvh/wide_bvh.h"
 
-#include "accel/bvh/bvh_build_memory.h"
+#include "accel/common/huge_pages.h"
 
 #include <limits>
 #include <span>
@@ -97,8 +97,8 @@ WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene) {
   }
   out.nodes.reserve(tree.nodes.size() / 2 + 1);
   out.packets.reserve(packets);
-  bvh_advise_huge_pages(out.nodes.data(), out.nodes.capacity() * sizeof(WideBvhNode<N>));
-  bvh_advise_huge_pages(out.packets.data(), out.packets.capacity() * sizeof(TrianglePacket));
+  advise_huge_pages(out.nodes.data(), out.nodes.capacity() * sizeof(WideBvhNode<N>));
+  advise_huge_pages(out.packets.data(), out.packets.capacity() * sizeof(TrianglePacket));
   out.root_box = tree.nodes[0].box;
   Collapser<N>(tree, scene, out).emit(0);
   return out;
