@@ -319,7 +319,7 @@ int run_trace(const TraceCommand& o) {
 
 struct RenderCommand {
   std::string scene, accel = "embree", out;
-  std::string camera = "outside";  ///< outside: frame_camera; inside: inside_camera (camera.h)
+  std::string camera = "outside";  ///< a camera_placement_names() entry (camera.h)
   int width = 512, height = 512, threads = 0;
   bool heatmap = false;
   bool log_scale = false;  ///< --log: the heatmap's colours on a log scale
@@ -332,7 +332,7 @@ int run_render(const RenderCommand& o) {
   if (o.log_scale && !o.heatmap) throw InputError("--log: a log colour scale needs --heatmap");
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
   auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene); });
-  const Camera camera = o.camera == "inside" ? inside_camera(scene->bounds()) : frame_camera(scene->bounds());
+  const Camera camera = placed_camera(parse_camera_placement(o.camera), scene->bounds());
   const std::vector<Ray> rays = image_rays(camera, o.width, o.height);
   std::vector<float> values(rays.size());
   if (o.heatmap) {
@@ -400,7 +400,7 @@ int main(int argc, char** argv) {
   render_cmd->add_option("--height", render.height, "image height");
   render_cmd->add_option("--threads", render.threads, "threads");
   render_cmd->add_option("--camera", render.camera, "outside (framing the scene box) or inside (for enclosed scenes)")
-      ->check(CLI::IsMember({"outside", "inside"}));
+      ->check(CLI::IsMember(camera_placement_names()));
   render_cmd->add_flag("--heatmap", render.heatmap, "nodes + tests per pixel with a colour bar");
   render_cmd->add_flag("--log", render.log_scale, "with --heatmap: a logarithmic colour scale");
 

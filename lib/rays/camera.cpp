@@ -71,4 +71,20 @@ std::vector<Ray> image_rays(const Camera& camera, int width, int height) {
   return rays;
 }
 
+const std::vector<std::string>& camera_placement_names() {
+  static const std::vector<std::string> names{"outside", "inside"};
+  return names;
+}
+
+CameraPlacement parse_camera_placement(const std::string& name) {
+  if (name == "outside") return CameraPlacement::outside;
+  if (name == "inside") return CameraPlacement::inside;
+  throw InputError("camera placement '" + name + "': expected outside or inside");
+}
+
+Camera placed_camera(CameraPlacement placement, const Bounds3f& bounds, double fov_degrees, const Vec3d& from) {
+  return placement == CameraPlacement::inside ? inside_camera(bounds, fov_degrees, from)
+                                              : frame_camera(bounds, fov_degrees, from);
+}
+
 }  // namespace raylab

@@ -1,5 +1,6 @@
 #pragma once
 /// The pinhole camera of the `primary` ray set and of `raylab render`.
+#include <string>
 #include <vector>
 
 #include "geometry/bounds.h"
@@ -39,6 +40,19 @@ inline constexpr double kInsideCameraFraction = 0.9;
 /// an outside camera cannot see. Same field of view, image up and errors as frame_camera.
 Camera inside_camera(const Bounds3f& bounds, double fov_degrees = kDefaultFovDegrees,
                      const Vec3d& from = kDefaultCameraFrom);
+
+/// Where a camera-based ray set (`camera=`) or `raylab render --camera` puts the eye.
+enum class CameraPlacement { outside, inside };
+
+/// "outside" and "inside", in the order of CameraPlacement.
+const std::vector<std::string>& camera_placement_names();
+
+/// The placement called `name` (one of camera_placement_names()); throws InputError otherwise.
+CameraPlacement parse_camera_placement(const std::string& name);
+
+/// frame_camera for CameraPlacement::outside, inside_camera for CameraPlacement::inside.
+Camera placed_camera(CameraPlacement placement, const Bounds3f& bounds,
+                     double fov_degrees = kDefaultFovDegrees, const Vec3d& from = kDefaultCameraFrom);
 
 /// The ray through image point (px, py) of a W×H image (square pixels, aspect W/H): origin at
 /// the eye, unit direction (rounded to float), tmin = 0, tmax = inf.

@@ -113,7 +113,8 @@ std::vector<Ray> generate_rays(const std::string& spec, const Scene& scene, cons
   const bool camera_based = name == "primary" || name == "diffuse" || name == "shadow" || name == "ao";
   const double fov = camera_based ? r.get_double("fov", kDefaultFovDegrees, 1.0, 179.0) : kDefaultFovDegrees;
   const Vec3d from = camera_based ? read_from(r) : kDefaultCameraFrom;
-  const std::string placement = camera_based ? r.get_choice("camera", "outside", {"outside", "inside"}) : "outside";
+  const CameraPlacement placement = parse_camera_placement(
+      camera_based ? r.get_choice("camera", "outside", camera_placement_names()) : "outside");
   const auto seed = name == "primary" ? kDefaultRaySeed
                                       : static_cast<std::uint64_t>(r.get_int(
                                             "seed", static_cast<std::int64_t>(kDefaultRaySeed), 0,
@@ -122,8 +123,7 @@ std::vector<Ray> generate_rays(const std::string& spec, const Scene& scene, cons
   const Bounds3f bounds = checked_bounds(scene, spec);
 
   if (camera_based) {
-    const Camera camera =
-        placement == "inside" ? inside_camera(bounds, fov, from) : frame_camera(bounds, fov, from);
+    const Camera camera = placed_camera(placement, bounds, fov, from);
     if (name == "primary") {
       const int w = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(count)))));
       return image_rays(camera, w, w);
