@@ -179,7 +179,7 @@ TEST(KdTree, SplitEventsGiveEachChildTheSortedEventsOfItsReferences) {
       append_events(refs, a, parent.axis[a]);
       std::sort(parent.axis[a].begin(), parent.axis[a].end());
     }
-    std::vector<KeptEvents> kept(refs.size(), 0);
+    std::vector<KeptEvents> kept(refs.size() + kKeptPadding, 0);
     std::vector<PrimRef> left, right, left_new, right_new;
     std::size_t kept_l[3] = {0, 0, 0}, kept_r[3] = {0, 0, 0};
     auto count = [](const Bounds3f& b, KeptEvents bits, int child, std::size_t(&k)[3]) {

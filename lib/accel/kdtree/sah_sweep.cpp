@@ -4,6 +4,10 @@
 #include <cmath>
 #include <cstring>
 
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+#include <immintrin.h>
+#endif
+
 #include "accel/kdtree/sah_sweep_events.h"
 #include "accel/kdtree/sah_sweep_sort.h"
 
@@ -289,6 +293,9 @@ SplitCandidate find_split_sort(std::span<const PrimRef> refs, const Bounds3f& bo
 
 namespace {
 
+/// Slots past a child's events that the splice of split_events may write.
+constexpr std::size_t kSpliceSlack = 8;
+
 /// std::sort, with its result: up to 16 elements libstdc++'s std::sort is a plain insertion
 /// sort, which is stable, as is this one.
 void sort_events(EventVector& v) {
@@ -364,14 +371,35 @@ void split_events(const NodeEvents& parent, const std::vector<KeptEvents>& kept,
     const EventVector& in = parent.axis[a];
     EventVector& out_l = left.axis[a];
     EventVector& out_r = right.axis[a];
-    // Room for the child's events, plus one slot that the branchless splice may write past the end.
-    out_l.resize(kept_l[a] + new_l.size() + 1);
-    out_r.resize(kept_r[a] + new_r.size() + 1);
+    // Room for the child's events, plus the slots that the splice may write past the end.
+    out_l.resize(kept_l[a] + new_l.size() + kSpliceSlack);
+    out_r.resize(kept_r[a] + new_r.size() + kSpliceSlack);
     // One pass splices the kept events into both children, in order; then the new events are
     // merged in (as std::merge: at equal keys the parent's event first).
     SplitEvent* pl = out_l.data();
     SplitEvent* pr = out_r.data();
-    for (const SplitEvent& e : in) {
+    const SplitEvent* src = in.data();
+    const SplitEvent* const src_end = src + in.size();
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+    // Eight events at a time: their KeptEvents gathered (four bytes from each primitive's, hence
+    // kKeptPadding), each child's compressed into a full store whose tail the next store or the
+    // merge overwrites (hence kSpliceSlack).
+    static_assert(sizeof(SplitEvent) == 8 && kSpliceSlack >= 8 && kKeptPadding >= 3);
+    const __m256i lower_mask = _mm256_set1_epi32(static_cast<int>(1u << lower_bit));
+    const __m256i upper_mask = _mm256_set1_epi32(static_cast<int>(1u << upper_bit));
+    for (; src + 8 <= src_end; src += 8) {
+      const __m512i ev = _mm512_loadu_si512(src);
+      const __m256i prim = _mm512_maskz_cvtepi64_epi32(0xff, _mm512_maskz_srli_epi64(0xff, ev, 34));
+      const __m256i k = _mm256_i32gather_epi32(reinterpret_cast<const int*>(kp), prim, 1);
+      const __mmask8 to_l = _mm256_test_epi32_mask(k, lower_mask), to_r = _mm256_test_epi32_mask(k, upper_mask);
+      _mm512_storeu_si512(pl, _mm512_maskz_compress_epi64(to_l, ev));
+      _mm512_storeu_si512(pr, _mm512_maskz_compress_epi64(to_r, ev));
+      pl += std::popcount(static_cast<unsigned>(to_l));
+      pr += std::popcount(static_cast<unsigned>(to_r));
+    }
+#endif
+    for (; src != src_end; ++src) {
+      const SplitEvent e = *src;
       const unsigned k = kp[e.prim()];
       *pl = e;
       *pr = e;
