@@ -34,6 +34,7 @@ class KdBuilderImpl {
     const bool use_events = config_.builder == KdBuilder::sah && config_.sweep == KdSweep::events;
     if (use_events)
       for (int a = 0; a < 3; ++a) {
+        root.events[0].axis[a].reserve(2 * root.refs[0].size());  // at most two per reference
         append_events(root.refs[0], a, root.events[0].axis[a]);
         sort_root_events(root.events[0].axis[a]);
       }
