@@ -250,9 +250,11 @@ TEST(KdTree, EventSweepChoosesTheFirstCheapestCandidate) {
     while (refs.size() < n) {
       float lo = coordinate(), hi = rng() % 5 == 0 ? lo : coordinate();
       if (lo > hi) std::swap(lo, hi);
-      refs.push_back({Bounds3f({lo, 0.0f, 0.0f}, {hi, 3.0f, 2.0f}), static_cast<std::uint32_t>(refs.size())});
-      if (mirrored && refs.size() < n)
-        refs.push_back({Bounds3f({6.0f - hi, 0.0f, 0.0f}, {6.0f - lo, 3.0f, 2.0f}), static_cast<std::uint32_t>(refs.size())});
+      auto add = [&](float l, float h) {
+        refs.push_back({Bounds3f({l, 0.0f, 0.0f}, {h, 3.0f, 2.0f}), static_cast<std::uint32_t>(refs.size())});
+      };
+      add(lo, hi);
+      if (mirrored && refs.size() < n) add(6.0f - hi, 6.0f - lo);
     }
     EventVector events;
     append_events(refs, 0, events);

@@ -107,7 +107,7 @@ struct RunSweep {
     return best;
   }
 
-  /// For m >= 9.
+  /// Requires m >= 9.
   RunBest run_vector(const SplitEvent* e, std::size_t m) const {
     // Counts fit in 32 bits: n < 2^30 (SplitEvent::kMaxPrims). The counts carried from one block
     // of eight to the next stay in vectors (every lane equal), off the scalar units.
@@ -178,7 +178,8 @@ struct RunSweep {
     const V8d cost = second ? lane_cost[1] : lane_cost[0], pos = second ? lane_pos[1] : lane_pos[0];
     RunBest best;
     for (int l = 0; l < 8; ++l)
-      if (cost[l] < best.cost || (cost[l] == best.cost && pos[l] < best.pos)) best = {cost[l], static_cast<float>(pos[l])};
+      if (cost[l] < best.cost || (cost[l] == best.cost && pos[l] < best.pos))
+        best = {cost[l], static_cast<float>(pos[l])};
     return best;
   }
 };

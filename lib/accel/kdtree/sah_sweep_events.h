@@ -122,9 +122,9 @@ struct SplitEventsScratch {
 inline constexpr std::size_t kKeptPadding = 3;
 
 /// The children's sorted event lists: the parent's events that a child keeps (`kept`, indexed by
-/// primitive id, kKeptPadding bytes longer) are spliced in order; the events of `left_new` and `right_new` (the references
-/// of the primitives with new bounds in a child) along the axes their child does not keep are
-/// sorted and merged in. `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along
+/// primitive id, kKeptPadding bytes longer) are spliced in order; the events of `left_new` and
+/// `right_new` (the references of the primitives with new bounds in a child) along the axes their
+/// child does not keep are sorted and merged in. `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along
 /// axis a that each child keeps. `left` and `right` are overwritten (their capacity is reused).
 void split_events(const NodeEvents& parent, const std::vector<KeptEvents>& kept, std::span<const PrimRef> left_new,
                   std::span<const PrimRef> right_new, const std::size_t (&kept_l)[3], const std::size_t (&kept_r)[3],
