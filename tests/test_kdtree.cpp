@@ -179,7 +179,7 @@ TEST(KdTree, SplitEventsGiveEachChildTheSortedEventsOfItsReferences) {
       append_events(refs, a, parent.axis[a]);
       std::sort(parent.axis[a].begin(), parent.axis[a].end());
     }
-    std::vector<KeptEvents> kept(refs.size(), 0);
+    std::vector<KeptEvents> kept(refs.size() + kKeptPadding, 0);
     std::vector<PrimRef> left, right, left_new, right_new;
     std::size_t kept_l[3] = {0, 0, 0}, kept_r[3] = {0, 0, 0};
     auto count = [](const Bounds3f& b, KeptEvents bits, int child, std::size_t(&k)[3]) {
@@ -227,6 +227,75 @@ TEST(KdTree, SplitEventsGiveEachChildTheSortedEventsOfItsReferences) {
   }
   EXPECT_GT(straddlers_keeping, 100u);
   EXPECT_GT(straddlers_renewing, 100u);
+}
+
+/// The event sweep against a brute-force scan of the same candidates: at every distinct event
+/// position strictly inside the box, N(L) and N(R) counted from the primitives' bounds, the cost
+/// in the sweep's documented form; the two empty-space cut-offs by SahCost::split. The cheapest
+/// wins, the first in position order among equal costs. Lists of every length from 1 to 90 (both
+/// sides of the sweep's blocks of eight), with runs of equal positions, planar events, bounds
+/// on and beyond the box faces, and mirror-symmetric sets, whose mirrored planes cost exactly
+/// the same (the lower one must win).
+TEST(KdTree, EventSweepChoosesTheFirstCheapestCandidate) {
+  std::mt19937 rng(2024);
+  const Bounds3f box({0.0f, 0.0f, 0.0f}, {6.0f, 3.0f, 2.0f});
+  const SahCost cost{1.0, 0.2, 0.2, 0.0};
+  const double sa = surface_area_d(box);
+  std::size_t ties = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const bool mirrored = trial % 3 == 0;
+    const std::size_t n = 1 + static_cast<std::size_t>(trial) % 45;
+    std::vector<PrimRef> refs;
+    auto coordinate = [&] { return static_cast<float>(static_cast<int>(rng() % 27) - 1) * 0.25f; };  // -0.25 .. 6.25
+    while (refs.size() < n) {
+      float lo = coordinate(), hi = rng() % 5 == 0 ? lo : coordinate();
+      if (lo > hi) std::swap(lo, hi);
+      auto add = [&](float l, float h) {
+        refs.push_back({Bounds3f({l, 0.0f, 0.0f}, {h, 3.0f, 2.0f}), static_cast<std::uint32_t>(refs.size())});
+      };
+      add(lo, hi);
+      if (mirrored && refs.size() < n) add(6.0f - hi, 6.0f - lo);
+    }
+    EventVector events;
+    append_events(refs, 0, events);
+    std::sort(events.begin(), events.end());
+    SplitCandidate got;
+    sweep_events(events, 0, box, n, cost, got);
+
+    SplitCandidate expected;
+    std::vector<double> costs;
+    const double a0 = 2.0 * 3.0 * 2.0, per_extent = 2.0 * (3.0 + 2.0);
+    auto consider = [&](float p, double c, int empty_child) {
+      costs.push_back(c);
+      if (c < expected.cost) expected = {0, p, c, empty_child};
+    };
+    const float first = events.front().pos, last = events.back().pos;
+    if (const float below = std::nextafter(first, 0.0f); first > 0.0f && below > 0.0f)
+      consider(below, cost.split(sa, a0 + per_extent * below, a0 + per_extent * (6.0 - below), 0, n), 0);
+    std::vector<float> positions;
+    for (const SplitEvent& e : events) positions.push_back(e.pos);
+    positions.erase(std::unique(positions.begin(), positions.end()), positions.end());
+    for (const float p : positions) {
+      if (!(p > 0.0f && p < 6.0f)) continue;
+      std::size_t n_l = 0, n_r = 0;
+      for (const PrimRef& r : refs) {
+        n_l += r.box.lo.x <= p;
+        n_r += r.box.hi.x >= p;
+      }
+      const double sa_l = a0 + per_extent * (double(p) - 0.0), sa_r = a0 + per_extent * (6.0 - double(p));
+      consider(p, cost.c_trav + cost.c_isect / sa * (sa_l * double(n_l) + sa_r * double(n_r)), -1);
+    }
+    if (const float above = std::nextafter(last, 6.0f); last < 6.0f && above < 6.0f)
+      consider(above, cost.split(sa, a0 + per_extent * above, a0 + per_extent * (6.0 - above), n, 0), 1);
+    std::sort(costs.begin(), costs.end());
+    ties += costs.size() > 1 && costs[0] == costs[1];
+
+    ASSERT_EQ(got.axis, expected.axis) << "trial " << trial;
+    ASSERT_EQ(std::bit_cast<std::uint32_t>(got.pos), std::bit_cast<std::uint32_t>(expected.pos)) << "trial " << trial;
+    ASSERT_EQ(std::bit_cast<std::uint64_t>(got.cost), std::bit_cast<std::uint64_t>(expected.cost)) << "trial " << trial;
+    ASSERT_EQ(got.empty_child, expected.empty_child) << "trial " << trial;
+  }
+  EXPECT_GT(ties, 50u);  // the tie rule was exercised
 }
 
 TEST(KdTree, SortAndEventSweepsBuildTheSameTree) {

@@ -23,7 +23,7 @@ namespace {
 class KdBuilderImpl {
  public:
   KdBuilderImpl(const Scene& scene, const KdTreeConfig& config, KdTreeData& out)
-      : scene_(scene), config_(config), out_(out), kept_(scene.primitive_count(), 0) {}
+      : scene_(scene), config_(config), out_(out), kept_(scene.primitive_count() + kKeptPadding, 0) {}
 
   void build_root(std::vector<PrimRef> refs) {
     max_depth_ = kd_max_depth(config_, refs.size());
@@ -34,6 +34,7 @@ class KdBuilderImpl {
     const bool use_events = config_.builder == KdBuilder::sah && config_.sweep == KdSweep::events;
     if (use_events)
       for (int a = 0; a < 3; ++a) {
+        root.events[0].axis[a].reserve(2 * root.refs[0].size());  // at most two per reference
         append_events(root.refs[0], a, root.events[0].axis[a]);
         sort_root_events(root.events[0].axis[a]);
       }
@@ -214,7 +215,7 @@ class KdBuilderImpl {
   const Scene& scene_;
   const KdTreeConfig& config_;
   KdTreeData& out_;
-  std::vector<KeptEvents> kept_;  ///< by primitive id, for split_events
+  std::vector<KeptEvents> kept_;  ///< by primitive id (and kKeptPadding more), for split_events
   std::vector<Level> levels_;
   std::vector<PrimRef> left_straddlers_, right_straddlers_;
   SplitEventsScratch split_scratch_;

@@ -117,10 +117,14 @@ struct SplitEventsScratch {
   EventVector new_l, new_r;
 };
 
+/// Bytes past the last primitive's entry that `kept` must have for split_events (it reads four
+/// bytes at a time); their values are ignored.
+inline constexpr std::size_t kKeptPadding = 3;
+
 /// The children's sorted event lists: the parent's events that a child keeps (`kept`, indexed by
-/// primitive id) are spliced in order; the events of `left_new` and `right_new` (the references
-/// of the primitives with new bounds in a child) along the axes their child does not keep are
-/// sorted and merged in. `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along
+/// primitive id, kKeptPadding bytes longer) are spliced in order; the events of `left_new` and
+/// `right_new` (the references of the primitives with new bounds in a child) along the axes their
+/// child does not keep are sorted and merged in. `kept_l[a]` and `kept_r[a]` must be the numbers of parent events along
 /// axis a that each child keeps. `left` and `right` are overwritten (their capacity is reused).
 void split_events(const NodeEvents& parent, const std::vector<KeptEvents>& kept, std::span<const PrimRef> left_new,
                   std::span<const PrimRef> right_new, const std::size_t (&kept_l)[3], const std::size_t (&kept_r)[3],
