@@ -9,7 +9,8 @@
 ///   t* < tmin:          only the far child, on [tmin, tmax];
 ///   tmin <= t* <= tmax: the near child on [tmin, t*], then the far child on [t*, tmax].
 /// Robustness: t* carries a relative error below 3 ulps, so the comparisons use t* widened by
-/// kPlaneSlack·|t*| on each side (a child is skipped only when the exact ray surely misses it).
+/// kPlaneSlack·|t*| on each side, or the interval widened as much (kd_traverse_lines): a child is
+/// skipped only when the exact ray surely misses it.
 /// A ray with d[a] = ±0 has inv[a] = +inf (safe_inverse) and t* = ±inf by its origin's side:
 /// t* = +inf keeps it in the near (lower) child, t* = -inf in the far (upper) one. A ray lying in a split plane (d[a] = 0,
 /// o[a] = s) has t* = 0·inf = NaN: every comparison with NaN is false, so it visits both
@@ -158,6 +159,12 @@ inline bool kd_test_packed_leaf(const TrianglePacket* packet, std::uint32_t coun
 /// branchless selection (cmov/blend) puts every node's load behind the previous node's
 /// arithmetic and measured ~25% slower than predicted branches on BM_KdTrace. For kAnyHit,
 /// returns at the first hit (the caller passes a ray whose tmax is already closed).
+/// The slack is put on the interval rather than on t*: t* is compared with [lo, hi] =
+/// [tmin - kPlaneSlack·|tmin|, min(tmax, closest) + kPlaneSlack·|min(tmax, closest)|], which
+/// changes only when the interval does, and a child's bound is the unwidened t* (the slack of
+/// 1e-6 on one side covers the rounding of both t's, 2γ3 < 2^-20). Measured on BM_KdTrace
+/// (alternating, CPU time) 1.04x on primary and 1.05x on diffuse rays against widening t* at
+/// every node.
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   TreeRay<Kernel, kMailbox> r;
@@ -165,7 +172,10 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
   float tmin = r.tmin, tmax = r.tmax;
   const Vec3f& inv = r.inv;
   const float org[4] = {ray.org.x, ray.org.y, ray.org.z, 0.0f}, rcp[4] = {inv.x, inv.y, inv.z, 0.0f};
-  const std::uint32_t upper_first[4] = {inv.x > 0.0f ? 0u : 1u, inv.y > 0.0f ? 0u : 1u, inv.z > 0.0f ? 0u : 1u, 0u};
+  // Bit a: the upper child is the near one along axis a (a shift, not a load, on the node chain).
+  const std::uint32_t upper_first = (inv.x > 0.0f ? 0u : 1u) | (inv.y > 0.0f ? 0u : 2u) | (inv.z > 0.0f ? 0u : 4u);
+  auto below = [](float x) { return x - kPlaneSlack * std::abs(x); };
+  auto above = [](float x) { return x + kPlaneSlack * std::abs(x); };
   struct Entry {
     std::uint32_t node;
     float tmin, tmax;
@@ -176,29 +186,30 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
   std::uint32_t index = 0;
   for (;;) {
     const KdNode* node = &tree.lines[index];
+    float lo = below(tmin), hi = above(std::min(tmax, Kernel::closest(r.ctx)));
     while (!node->is_leaf()) {
       counters.node();
       const std::uint32_t a = node->bits & 3u;
       const float t = (node->split - org[a]) * rcp[a];  // NaN: the ray lies in the plane
-      const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
-      const float t_lo = w0 < w1 ? w0 : w1, t_hi = w0 < w1 ? w1 : w0;
-      const std::uint32_t near = node->above_child() + upper_first[a], far = near ^ 1u;
-      if (t_lo > std::min(tmax, Kernel::closest(r.ctx))) {  // t* > tmax
+      const std::uint32_t near = node->above_child() + ((upper_first >> a) & 1u), far = near ^ 1u;
+      if (t > hi) {  // t* > tmax
         index = near;
-      } else if (t_hi < tmin) {  // t* < tmin
+      } else if (t < lo) {  // t* < tmin
         index = far;
       } else {  // tmin <= t* <= tmax (NaN: both, whole)
         // An empty leaf (an empty-space cut-off's child) is not visited: an empty near child
         // hands the ray to the far one, an empty far child is not pushed.
-        const float far_tmin = t_lo > tmin ? t_lo : tmin;
+        const float far_tmin = t > tmin ? t : tmin;
         if (tree.lines[near].is_empty_leaf()) {
           index = far;
           tmin = far_tmin;
+          lo = below(tmin);
         } else {
           stack[top] = {far, far_tmin, tmax};
           top += !tree.lines[far].is_empty_leaf();
           index = near;
-          tmax = t_hi < tmax ? t_hi : tmax;
+          tmax = t < tmax ? t : tmax;
+          hi = above(std::min(tmax, Kernel::closest(r.ctx)));
         }
       }
       node = &tree.lines[index];
@@ -213,7 +224,7 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
     do {
       if (top == 0) return found;
       --top;
-    } while (Kernel::closest(r.ctx) < stack[top].tmin);  // the hit lies before that cell
+    } while (Kernel::closest(r.ctx) < below(stack[top].tmin));  // the hit lies before that cell
     index = stack[top].node;
     tmin = stack[top].tmin;
     tmax = stack[top].tmax;
