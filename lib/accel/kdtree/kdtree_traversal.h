@@ -190,8 +190,12 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
   float tmin = r.tmin, tmax = r.tmax;
   const Vec3f& inv = r.inv;
   const float org[4] = {ray.org.x, ray.org.y, ray.org.z, 0.0f}, rcp[4] = {inv.x, inv.y, inv.z, 0.0f};
-  // Bit a: the upper child is the near one along axis a (a shift, not a load, on the node chain).
-  const std::uint32_t upper_first = (inv.x > 0.0f ? 0u : 1u) | (inv.y > 0.0f ? 0u : 2u) | (inv.z > 0.0f ? 0u : 4u);
+  // Bit a, repeated every 4 bits: the upper child is the near one along axis a. Shifted by a
+  // node's bits mod 32 (axis + 4·(above_child mod 8)) it gives that bit: one shift on the
+  // node-to-node chain. BM_KdTrace (alternating, CPU time): a per-axis table load instead was
+  // 1.03-1.10x slower, shifting by the masked axis 1.01x slower (17 of 18 runs).
+  const std::uint32_t upper_first =
+      ((inv.x > 0.0f ? 0u : 1u) | (inv.y > 0.0f ? 0u : 2u) | (inv.z > 0.0f ? 0u : 4u)) * 0x11111111u;
   auto below = [](float x) { return x - kPlaneSlack * std::abs(x); };
   auto above = [](float x) { return x + kPlaneSlack * std::abs(x); };
   struct Entry {
@@ -209,7 +213,7 @@ bool kd_traverse_lines(const KdTreeView& tree, const Ray& ray, Hit& hit, Counter
       counters.node();
       const std::uint32_t a = node->bits & 3u;
       const float t = (node->split - org[a]) * rcp[a];  // NaN: the ray lies in the plane
-      const std::uint32_t near = node->above_child() + ((upper_first >> a) & 1u), far = near ^ 1u;
+      const std::uint32_t near = node->above_child() + ((upper_first >> (node->bits & 31u)) & 1u), far = near ^ 1u;
       if (t > hi) {  // t* > tmax
         index = near;
       } else if (t < lo) {  // t* < tmin
