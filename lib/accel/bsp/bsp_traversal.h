@@ -6,8 +6,8 @@
 /// plane (n·d within its error bound of 0 and the origin within its error bound of the plane)
 /// visits both children over its whole interval, and a ray exactly parallel to a plane visits the
 /// side of its origin only when the origin is surely off the plane. Axis-aligned planes are taken
-/// in float as the kd-tree's splits. A leaf's triangles are tested 4-wide when the tree's leaves
-/// are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
+/// in float as the kd-tree's splits. A leaf's triangles are tested 8 at a time when the tree's
+/// leaves are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
 #include <cmath>
 #include <cstdint>
 #include <utility>

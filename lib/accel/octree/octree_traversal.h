@@ -1,7 +1,7 @@
 #pragma once
 /// Front-to-back octree traversal in ray order, three ways (OctreeConfig::traversal):
 ///  - octree_traverse_stack (the default): iterative, each node's centre-plane crossings
-///    ordered at once, leaves tested 4-wide when packed (octree_pack_leaves).
+///    ordered at once, leaves tested 8 triangles at a time when packed (octree_pack_leaves).
 ///  - octree_traverse_revelles: the parametric algorithm of Revelles, Ureña and Lastra (WSCG
 ///    2000), octree_revelles.h.
 ///  - octree_traverse_kd: each node's three centre planes taken one at a time (x, then y, then
@@ -48,12 +48,13 @@ inline void octree_pack_leaves(const Scene& scene, const std::vector<OctNode>& n
       packed_nodes, packets);
 }
 
-/// Tests the primitives of a leaf, 4-wide when the leaves are packed (kd_test_packed_leaf, bit-identical
-/// to the scalar kernel), else one by one (kd_test_primitives); true on a hit.
+/// Tests the primitives of a leaf, 8 at a time when the leaves are packed (kd_test_packed_leaf,
+/// bit-identical to the scalar kernel), else one by one (kd_test_primitives); true on a hit.
 template <bool kAnyHit, class Kernel, bool kMailbox, class Counters>
 inline bool octree_test_leaf(const OctreeView& tree, const OctNode& node, TreeRay<Kernel, kMailbox>& r, Hit& hit,
                              Counters& counters) {
-  if (tree.packets != nullptr) return kd_test_packed_leaf<kAnyHit>(tree.packets + node.first, node.count, r, hit, counters);
+  if (tree.packets != nullptr)
+    return kd_test_packed_leaf<kAnyHit>(tree.packets + node.first, node.count, r, hit, counters);
   counters.leaf();
   return kd_test_primitives<kAnyHit>(*tree.scene, tree.prims + node.first, node.count, r, hit, counters);
 }
