@@ -46,7 +46,8 @@ TEST(BspPlaneClassification, ExactSidesOfATrianglePlane) {
 TEST(BspTree, RaysInItsPlanesAgreeWithTheOracleAsWellAsBruteForce) {
   for (const std::string spec : {"walls:n=6,angle=30", "soup:n=500", "grass:blades=100"}) {
     const auto scene = make_scene(spec);
-    const BspTree tree(scene, bsp_config(""));
+    // The default C_isect (kdtree_config.h) keeps scenes this small in one leaf.
+    const BspTree tree(scene, bsp_config("c_isect=0.2"));
     EXPECT_GT(tree.data().leaves, 1u) << spec;
     // Rays lying in split planes: from a node's plane, two in-plane directions.
     std::vector<Ray> rays;
@@ -76,7 +77,7 @@ TEST(BspTree, RaysInItsPlanesAgreeWithTheOracleAsWellAsBruteForce) {
     const auto base_o = trace_rays(*brute, rays, TraceOptions{1, false, true});
     const std::size_t base_m = compare_hits(rays, base.hits, ref.hits, diag).mismatches;
     const std::size_t base_mo = compare_occlusion(base_o.blocked, ref_o.blocked).mismatches;
-    for (const std::string accel_spec : {"bsp", "bsp:axis_candidates=0"}) {
+    for (const std::string accel_spec : {"bsp:c_isect=0.2", "bsp:axis_candidates=0,c_isect=0.2"}) {
       const auto accel = make_accelerator(accel_spec, scene);
       const auto got = trace_rays(*accel, rays, TraceOptions{1, false, false});
       const auto got_o = trace_rays(*accel, rays, TraceOptions{1, false, true});
@@ -84,7 +85,7 @@ TEST(BspTree, RaysInItsPlanesAgreeWithTheOracleAsWellAsBruteForce) {
       EXPECT_LE(compare_occlusion(got_o.blocked, ref_o.blocked).mismatches, base_mo) << accel_spec << " on " << spec;
     }
   }
-  const BspTree walls(make_scene("walls:n=6,angle=30"), bsp_config("axis_candidates=0"));
+  const BspTree walls(make_scene("walls:n=6,angle=30"), bsp_config("axis_candidates=0,c_isect=0.2"));
   EXPECT_GT(walls.data().triangle_planes, 0u);
 }
 

@@ -52,7 +52,7 @@ AccelKind make_bsp_kind() {
           "BSP tree: triangles' supporting planes (auto-partition) and axis planes by SAH on convex cells, exact "
           "classification, straddlers referenced on both sides",
           {{"c_trav", "1", "SAH traversal cost"},
-           {"c_isect", "0.2", "SAH intersection cost (the kd-tree's default)"},
+           {"c_isect", "0.07", "SAH intersection cost (the kd-tree's default)"},
            fitted_cost_param(),
            {"empty_bonus", "0.2", "SAH empty-space bonus"},
            {"triangle_candidates", "6", "supporting planes tried per node"},

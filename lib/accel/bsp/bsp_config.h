@@ -8,7 +8,7 @@ namespace raylab {
 
 struct BspConfig {
   /// The kd-tree's SAH (sah_cost.h) on the areas of the convex cells. Defaults as the kd-tree's
-  /// (kdtree_config.h: C_trav 1, C_isect 0.2); the spec reader sets them.
+  /// (kdtree_config.h: C_trav 1, C_isect 0.07); the spec reader sets them.
   SahCost cost{1.0, kKdDefaultIsect, 0.2, 0.0};
   /// Candidate supporting planes of the node's triangles tried per node (auto-partition),
   /// taken evenly spaced through the node's list.

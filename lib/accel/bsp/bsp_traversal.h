@@ -6,8 +6,8 @@
 /// plane (n·d within its error bound of 0 and the origin within its error bound of the plane)
 /// visits both children over its whole interval, and a ray exactly parallel to a plane visits the
 /// side of its origin only when the origin is surely off the plane. Axis-aligned planes are taken
-/// in float as the kd-tree's splits. A leaf's triangles are tested 4-wide when the tree's leaves
-/// are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
+/// in float as the kd-tree's splits. A leaf's triangles are tested 8 at a time when the tree's
+/// leaves are packed (bsp_pack_leaves), bit-identically to the scalar kernel (kd_test_packed_leaf).
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -46,12 +46,10 @@ inline void bsp_pack_leaves(const Scene& scene, const std::vector<BspNode>& node
 
 template <class Kernel, bool kAnyHit, class Counters>
 bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
-  const Vec3f inv = safe_inverse(ray.dir);
-  float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
-  auto ctx = Kernel::prepare(ray);
-  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
-  KdMailbox<false> no_mailbox;
+  TreeRay<Kernel> r;
+  if (!r.enter(ray, tree.bounds)) return false;
+  float tmin = r.tmin, tmax = r.tmax;
+  const Vec3f& inv = r.inv;
   const Vec3d o(ray.org), d(ray.dir);
   struct Entry {
     std::uint32_t node;
@@ -71,10 +69,10 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
         // its rounding error; NaN (the ray lies in the plane) visits both sides over the whole
         // interval; d[a] = ±0 gives inv = +inf and t* = ±inf, which keeps the origin's side.
         const float t = (static_cast<float>(node->origin[a]) - ray.org[a]) * inv[a];
-        const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
+        const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
         const float t_lo = w0 < w1 ? w0 : w1, t_hi = w0 < w1 ? w1 : w0;
         const std::uint32_t near = inv[a] > 0.0f ? negative : positive, far = inv[a] > 0.0f ? positive : negative;
-        if (t_lo > std::min(tmax, Kernel::closest(ctx))) {
+        if (t_lo > std::min(tmax, Kernel::closest(r.ctx))) {
           index = near;
         } else if (t_hi < tmin) {
           index = far;
@@ -110,7 +108,7 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
         const double slack = (err_s + std::abs(t) * err_nd) / std::abs(nd) + 1e-6 * std::abs(t);
         const float t_lo = static_cast<float>(t - slack), t_hi = static_cast<float>(t + slack);
         const std::uint32_t near = nd > 0.0 ? negative : positive, far = nd > 0.0 ? positive : negative;
-        if (t_lo > std::min(tmax, Kernel::closest(ctx))) {
+        if (t_lo > std::min(tmax, Kernel::closest(r.ctx))) {
           index = near;
         } else if (t_hi < tmin) {
           index = far;
@@ -124,12 +122,10 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
     }
     bool h;
     if (tree.packets != nullptr) {
-      h = kd_test_packed_leaf<Kernel, kAnyHit, false>(tree.packets + node->index, node->count, ctx, packet_ray, hit,
-                                                      no_mailbox, counters);
+      h = kd_test_packed_leaf<kAnyHit>(tree.packets + node->index, node->count, r, hit, counters);
     } else {
       counters.leaf();
-      h = kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node->index, node->count, ctx, hit, no_mailbox,
-                                              counters);
+      h = kd_test_primitives<kAnyHit>(*tree.scene, tree.prims + node->index, node->count, r, hit, counters);
     }
     if (h) {
       found = true;
@@ -138,7 +134,7 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
     do {
       if (top == 0) return found;
       --top;
-    } while (Kernel::closest(ctx) < stack[top].tmin);
+    } while (Kernel::closest(r.ctx) < stack[top].tmin);
     index = stack[top].node;
     tmin = stack[top].tmin;
     tmax = stack[top].tmax;

@@ -39,7 +39,7 @@ std::vector<ParamDoc> kdtree_params() {
           {"clip", "exact", "split clipping: none | bbox | exact (CGAL triangle/box predicate, perfect splits)"},
           {"traversal", "stack", "recursive (Kaplan/Arvo/Jansen) | stack"},
           {"c_trav", "1", "SAH traversal cost"},
-          {"c_isect", "0.2", "SAH intersection cost (kdtree_config.h: kKdDefaultIsect)"},
+          {"c_isect", "0.07", "SAH intersection cost (kdtree_config.h: kKdDefaultIsect)"},
           fitted_cost_param(),
           {"empty_bonus", "0.2", "SAH empty-space bonus in [0,1)"},
           {"max_depth", "0", "safety depth limit; 0 = 8 + 1.3 log2 N, at most 64"},

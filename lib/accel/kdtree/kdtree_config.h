@@ -24,22 +24,26 @@ enum class KdTraversal {
   stack,      ///< the same order with an explicit stack (Havran's thesis, TA_B^rec), over nodes in cache lines
 };
 
-/// The default C_isect for C_trav = 1: the ratio of the lab's fitted kd-tree constants
-/// (data/cost/default_model.json, families.kdtree.builder: C_isect 1.43 ns per test against
-/// C_trav 7.28 ns per node, i.e. 0.196), which `cost=default` applies. A leaf test is one
-/// 4-wide packet test while a node visit is a dependent load, so the lecture's 1:1.5 splits far
-/// too deep (sphere:n=262144: 1.3M nodes against 196k). On BM_KdTrace (bench_kdtree: bunny00,
-/// armadillo, ChineseDragon-10kv) 1:0.2 traced ~20-30% faster than 1:1.5 on primary and diffuse
-/// rays, in less than half the memory (noisy shared machine; ratios to Embree in the same run).
+/// The default C_isect for C_trav = 1 (also the BSP tree's, bsp_config.h). A leaf test is one
+/// 8-wide test of two packets (kd_test_packed_leaf) while a node visit is a dependent load and a
+/// hard-to-predict branch, so a triangle costs far less than a node: the lecture's 1:1.5 splits
+/// far too deep (sphere:n=262144: 1.3M nodes against 196k), and so did 1:0.2, the ratio of the
+/// lab's fitted constants (data/cost/default_model.json, families.kdtree.builder: C_isect
+/// 1.43 ns per test against C_trav 7.28 ns per node, fitted with 4-wide leaves; `cost=default`
+/// applies them). On BM_KdTrace (bench_kdtree: bunny00, armadillo, ChineseDragon-10kv; passes
+/// alternating with 1:0.2 in one process, CPU time, geometric mean of the medians of 2 runs)
+/// C_isect 0.17 / 0.1 / 0.07 / 0.05 / 0.03 traced 1.03 / 1.10 / 1.13 / 1.12 / 1.05x as fast on
+/// primary rays and 1.02 / 1.07 / 1.10 / 1.09 / 1.04x on diffuse rays, and 0.07 takes 72 bytes
+/// per triangle instead of 105 (the BSP tree with 0.07: 1.18x primary, 1.21x diffuse, 1 run).
 /// Fixed here rather than read from the model, so that refitting it does not change the tree.
-inline constexpr double kKdDefaultIsect = 0.2;
+inline constexpr double kKdDefaultIsect = 0.07;
 
 struct KdTreeConfig {
   KdBuilder builder = KdBuilder::sah;
   KdSweep sweep = KdSweep::events;
   ClipMode clip = ClipMode::exact;
   KdTraversal traversal = KdTraversal::stack;
-  /// C_trav = 1, C_isect = 0.2 (kKdDefaultIsect), empty bonus 0.2.
+  /// C_trav = 1, C_isect = 0.07 (kKdDefaultIsect), empty bonus 0.2.
   SahCost cost{1.0, kKdDefaultIsect, 0.2, 0.0};
   /// Safety depth limit; 0 means the pbrt-v3 rule 8 + 1.3·log2(N) (pbrt-v3 §4.4.1), capped at 64.
   int max_depth = 0;

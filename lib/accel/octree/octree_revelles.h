@@ -17,8 +17,8 @@
 /// min exit, the paper's Table 2: from child c through the face of axis a, to c | bit a, or out
 /// of the node when bit a is already set).
 ///
-/// Robustness (as the kd-tree's, kdtree_traversal.h): every t carries a relative error below
-/// 3 ulps, so comparisons use t widened by kKdPlaneSlack·|t|. A comparison that the widening
+/// Robustness (as the kd-tree's, kdtree_traversal.h and tree_ray.h): every t carries a relative
+/// error below 3 ulps, so comparisons use t widened by kPlaneSlack·|t|. A comparison that the widening
 /// cannot decide (an entry or exit within the slack of a centre plane: the ray passes near a
 /// cell edge or corner) takes both branches: both first-child candidates and every face whose
 /// exit ties the minimum become successors. A child is then visited iff its widened interval
@@ -32,15 +32,15 @@
 #include <limits>
 #include <type_traits>
 
-#include "accel/kdtree/kdtree_traversal.h"
+#include "accel/common/tree_ray.h"
 #include "accel/octree/octree_node.h"
 
 namespace raylab {
 
 /// The parameter t widened by its rounding error, downward and upward.
-/// (t·(1 ∓ kKdPlaneSlack) keeps ±inf; t is never NaN here.)
-inline float oct_t_below(float t) { return std::min(t * (1.0f - kKdPlaneSlack), t * (1.0f + kKdPlaneSlack)); }
-inline float oct_t_above(float t) { return std::max(t * (1.0f - kKdPlaneSlack), t * (1.0f + kKdPlaneSlack)); }
+/// (t·(1 ∓ kPlaneSlack) keeps ±inf; t is never NaN here.)
+inline float oct_t_below(float t) { return std::min(t * (1.0f - kPlaneSlack), t * (1.0f + kPlaneSlack)); }
+inline float oct_t_above(float t) { return std::max(t * (1.0f - kPlaneSlack), t * (1.0f + kPlaneSlack)); }
 
 /// The mirrored-frame walk over the leaves a ray crosses, front to back.
 ///
@@ -162,7 +162,7 @@ bool octree_walk_revelles(const OctNode* nodes, const Bounds3f& root, const Ray&
                           Counters& counters) {
   const Vec3f inv = safe_inverse(ray.dir);
   float t0, t1;
-  if (!kd_root_interval(root, ray, inv, t0, t1)) return false;
+  if (!tree_root_interval(root, ray, inv, t0, t1)) return false;
   OctreeRevellesWalk<std::remove_reference_t<Leaf>, std::remove_reference_t<Cut>, Counters> walk(
       nodes, ray, inv, t0, t1, leaf, cut, counters);
   return walk.run(root);

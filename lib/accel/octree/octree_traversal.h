@@ -1,7 +1,7 @@
 #pragma once
 /// Front-to-back octree traversal in ray order, three ways (OctreeConfig::traversal):
 ///  - octree_traverse_stack (the default): iterative, each node's centre-plane crossings
-///    ordered at once, leaves tested 4-wide when packed (octree_pack_leaves).
+///    ordered at once, leaves tested 8 triangles at a time when packed (octree_pack_leaves).
 ///  - octree_traverse_revelles: the parametric algorithm of Revelles, Ureña and Lastra (WSCG
 ///    2000), octree_revelles.h.
 ///  - octree_traverse_kd: each node's three centre planes taken one at a time (x, then y, then
@@ -48,28 +48,22 @@ inline void octree_pack_leaves(const Scene& scene, const std::vector<OctNode>& n
       packed_nodes, packets);
 }
 
-/// Tests the primitives of a leaf, 4-wide when the leaves are packed (kd_test_packed_leaf, bit-identical
-/// to the scalar kernel), else one by one (kd_test_primitives); true on a hit.
-template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
-inline bool octree_test_leaf(const OctreeView& tree, const OctNode& node, typename Kernel::Context& ctx,
-                             const typename PacketKernel<Kernel>::Ray& packet_ray, Hit& hit,
-                             KdMailbox<kMailbox>& mailbox, Counters& counters) {
+/// Tests the primitives of a leaf, 8 at a time when the leaves are packed (kd_test_packed_leaf,
+/// bit-identical to the scalar kernel), else one by one (kd_test_primitives); true on a hit.
+template <bool kAnyHit, class Kernel, bool kMailbox, class Counters>
+inline bool octree_test_leaf(const OctreeView& tree, const OctNode& node, TreeRay<Kernel, kMailbox>& r, Hit& hit,
+                             Counters& counters) {
   if (tree.packets != nullptr)
-    return kd_test_packed_leaf<Kernel, kAnyHit>(tree.packets + node.first, node.count, ctx, packet_ray, hit, mailbox,
-                                                counters);
+    return kd_test_packed_leaf<kAnyHit>(tree.packets + node.first, node.count, r, hit, counters);
   counters.leaf();
-  return kd_test_primitives<Kernel, kAnyHit>(*tree.scene, tree.prims + node.first, node.count, ctx, hit, mailbox,
-                                             counters);
+  return kd_test_primitives<kAnyHit>(*tree.scene, tree.prims + node.first, node.count, r, hit, counters);
 }
 
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
-  const Vec3f inv = safe_inverse(ray.dir);
-  float t0, t1;
-  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, t0, t1)) return false;
-  auto ctx = Kernel::prepare(ray);
-  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
-  KdMailbox<kMailbox> mailbox;
+  TreeRay<Kernel, kMailbox> r;
+  if (!r.enter(ray, tree.bounds)) return false;
+  const Vec3f& inv = r.inv;
   /// A node of the tree (level 0), or one of its half-, quarter- or eighth-cells selected by the
   /// first `level` bits of `bits` (level 3: child `bits`).
   struct Entry {
@@ -80,16 +74,16 @@ bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counte
   };
   Entry stack[3 * 24 + 8];
   int top = 0;
-  stack[top++] = {tree.bounds, 0, 0, 0, t0, t1};
+  stack[top++] = {tree.bounds, 0, 0, 0, r.tmin, r.tmax};
   bool found = false;
   while (top > 0) {
     Entry e = stack[--top];
-    if (Kernel::closest(ctx) < e.tmin) continue;  // the hit lies before this cell
+    if (Kernel::closest(r.ctx) < e.tmin) continue;  // the hit lies before this cell
     for (;;) {
       const OctNode& node = tree.nodes[e.node];
       if (e.level == 0) {
         if (node.is_leaf()) {
-          if (octree_test_leaf<Kernel, kAnyHit>(tree, node, ctx, packet_ray, hit, mailbox, counters)) {
+          if (octree_test_leaf<kAnyHit>(tree, node, r, hit, counters)) {
             found = true;
             if constexpr (kAnyHit) return true;
           }
@@ -109,12 +103,12 @@ bool octree_traverse_kd(const OctreeView& tree, const Ray& ray, Hit& hit, Counte
       }
       float t = (octree_mid(e.box, a) - ray.org[a]) * inv[a];
       if (std::isnan(t)) t = 0.0f;
-      const float slack = std::isfinite(t) ? kKdPlaneSlack * std::abs(t) : 0.0f;
+      const float slack = std::isfinite(t) ? kPlaneSlack * std::abs(t) : 0.0f;
       const float t_lo = t - slack, t_hi = t + slack;
       const std::uint8_t lower = e.bits, upper = static_cast<std::uint8_t>(e.bits | (1u << a));
       const std::uint8_t near = inv[a] > 0.0f ? lower : upper, far = inv[a] > 0.0f ? upper : lower;
       const auto level = static_cast<std::uint8_t>(e.level + 1);
-      if (t_lo > std::min(e.tmax, Kernel::closest(ctx))) {
+      if (t_lo > std::min(e.tmax, Kernel::closest(r.ctx))) {
         e.bits = near;
       } else if (t_hi < e.tmin) {
         e.bits = far;
@@ -158,12 +152,10 @@ inline Bounds3f octree_child_box(const Bounds3f& box, const float mid[3], unsign
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  const Vec3f inv = safe_inverse(ray.dir);
-  float tmin, tmax;
-  if (!kd_root_interval(tree.bounds, traversal_ray<Kernel>(ray), inv, tmin, tmax)) return false;
-  auto ctx = Kernel::prepare(ray);
-  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
-  KdMailbox<kMailbox> mailbox;
+  TreeRay<Kernel, kMailbox> r;
+  if (!r.enter(ray, tree.bounds)) return false;
+  float tmin = r.tmin, tmax = r.tmax;
+  const Vec3f& inv = r.inv;
   // Real child = mirrored child ^ flip: bit a of flip is set when the near half of axis a is the
   // upper one (inv = +inf for d = ±0: t = ±inf keeps the origin's side, as in kd_cross).
   const unsigned flip = (inv.x > 0.0f ? 0u : 1u) | (inv.y > 0.0f ? 0u : 2u) | (inv.z > 0.0f ? 0u : 4u);
@@ -181,7 +173,7 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
     const OctNode* node = &tree.nodes[index];
     while (!node->is_leaf()) {
       counters.node();
-      const float tcut = std::min(tmax, Kernel::closest(ctx));
+      const float tcut = std::min(tmax, Kernel::closest(r.ctx));
       float mid[3], lo[3], hi[3];
       unsigned c0 = 0, crossed = 0;
       const unsigned split = octree_split_axes(box);
@@ -193,7 +185,7 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
         mid[a] = is_split ? octree_mid(box, a) : box.hi[a];
         const float t = is_split ? (mid[a] - ray.org[a]) * inv[a]  // NaN: the ray lies in the plane
                                  : (flip & (1u << a) ? -kInf : kInf);
-        const float w0 = t * (1.0f - kKdPlaneSlack), w1 = t * (1.0f + kKdPlaneSlack);
+        const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
         lo[a] = std::max(-kInf, w0 < w1 ? w0 : w1);  // NaN -> -inf
         hi[a] = std::min(kInf, w0 < w1 ? w1 : w0);   // NaN -> +inf
         if (hi[a] < tmin) c0 |= 1u << a;
@@ -258,7 +250,7 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
       tmax = kid_out[0];
       node = &tree.nodes[index];
     }
-    if (octree_test_leaf<Kernel, kAnyHit>(tree, *node, ctx, packet_ray, hit, mailbox, counters)) {
+    if (octree_test_leaf<kAnyHit>(tree, *node, r, hit, counters)) {
       found = true;
       if constexpr (kAnyHit) return true;
     }
@@ -266,7 +258,7 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
     do {
       if (top == 0) return found;
       --top;
-    } while (Kernel::closest(ctx) < stack[top].tmin);  // the hit lies before that cell
+    } while (Kernel::closest(r.ctx) < stack[top].tmin);  // the hit lies before that cell
     box.lo = Vec3f(stack[top].lo[0], stack[top].lo[1], stack[top].lo[2]);
     box.hi = Vec3f(stack[top].hi[0], stack[top].hi[1], stack[top].hi[2]);
     index = stack[top].node;
@@ -277,17 +269,15 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
 
 template <class Kernel, bool kAnyHit, bool kMailbox, class Counters>
 bool octree_traverse_revelles(const OctreeView& tree, const Ray& ray, Hit& hit, Counters& counters) {
-  auto ctx = Kernel::prepare(ray);
-  const typename PacketKernel<Kernel>::Ray packet_ray(ctx);
-  KdMailbox<kMailbox> mailbox;
+  TreeRay<Kernel, kMailbox> r;
+  r.prepare(ray);  // the walk finds its own root interval
   bool found = false;
   auto leaf = [&](std::uint32_t index, const Bounds3f&, float, float) {
-    const bool in_leaf =
-        octree_test_leaf<Kernel, kAnyHit>(tree, tree.nodes[index], ctx, packet_ray, hit, mailbox, counters);
+    const bool in_leaf = octree_test_leaf<kAnyHit>(tree, tree.nodes[index], r, hit, counters);
     found = found || in_leaf;
     return kAnyHit && in_leaf;
   };
-  auto cut = [&] { return Kernel::closest(ctx); };
+  auto cut = [&] { return Kernel::closest(r.ctx); };
   octree_walk_revelles(tree.nodes, tree.bounds, traversal_ray<Kernel>(ray), leaf, cut, counters);
   return found;
 }
