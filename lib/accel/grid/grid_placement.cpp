@@ -44,63 +44,107 @@ inline CellRange cell_range(const GridGeometry& g, const Bounds3f& b, float marg
   return r;
 }
 
-/// Sutherland-Hodgman: the part of the convex polygon in[0, n) with x[axis] >= bound (keep_above)
+/// Sutherland-Hodgman: the part of the convex polygon in[0, n) with x[kAxis] >= bound (kKeepAbove)
 /// or <= bound, written to out (at most n + 1 vertices); returns its vertex count.
-inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, int axis, float bound, bool keep_above) {
+template <int kAxis, bool kKeepAbove>
+inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, float bound) {
+  auto side = [bound](const Vec3f& v) { return kKeepAbove ? v[kAxis] - bound : bound - v[kAxis]; };
   int m = 0;
+  float da = side(in[0]);
   for (int i = 0; i < n; ++i) {
     const Vec3f& a = in[i];
     const Vec3f& b = in[i + 1 == n ? 0 : i + 1];
-    const float da = keep_above ? a[axis] - bound : bound - a[axis];
-    const float db = keep_above ? b[axis] - bound : bound - b[axis];
+    const float db = side(b);
     if (da >= 0.0f) out[m++] = a;
     if ((da < 0.0f) != (db < 0.0f)) {
       const float t = std::clamp(da / (da - db), 0.0f, 1.0f);
       Vec3f p = a + (b - a) * t;
-      p[axis] = bound;
+      p[kAxis] = bound;
       out[m++] = p;
     }
+    da = db;
   }
   return m;
 }
 
-/// Calls row(j, k, i_lo, i_hi) for the rows of cells (j, k) of range `r` that a triangle's part
-/// in them reaches, with the x-range of cells that part spans: the triangle clipped to each
-/// slab k widened by 2·margin, then to each row j widened by 2·margin, and the part's y- and
-/// x-extents widened by 2·margin. The extra margin covers the float rounding of the clipping (a
-/// few ulps of the coordinates, far below the margin), so the rows and ranges include every
-/// cell whose box widened by `margin` the triangle meets (and lie within the bounding box's).
+/// Calls line(u, v, w_lo, w_hi) for the lines of cells along axis kW (cells u along kU, v along kV)
+/// of range `r` that a triangle's part in them reaches, with the range of cells along kW that part
+/// spans: the triangle clipped to each slab v along kV widened by 2·margin, then to each line u
+/// along kU widened by 2·margin, and the part's kU- and kW-extents widened by 2·margin. The extra
+/// margin covers the float rounding of the clipping (a few ulps of the coordinates, far below the
+/// margin), so the lines and ranges include every cell whose box widened by `margin` the triangle
+/// meets (and lie within the bounding box's). In exact arithmetic these are the cells whose box
+/// widened by 2·margin the triangle meets, whatever the axes (the triangle's part in a line is
+/// convex, so it spans whole ranges), which leaves the axes free: the fewer lines, the fewer clips.
+template <int kV, int kU, int kW, class Line>
+inline void for_each_clipped_line(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
+                                  Line&& line) {
+  const float slack = 2.0f * margin;
+  Vec3f slab[8], tmp[8], part_in_line[8];
+  for (int v = r.lo[kV]; v <= r.hi[kV]; ++v) {
+    int ns = 3;
+    std::copy(tri, tri + 3, slab);
+    if (r.lo[kV] != r.hi[kV]) {
+      ns = clip_polygon<kV, true>(tri, 3, tmp, g.plane(kV, v) - slack);
+      ns = clip_polygon<kV, false>(tmp, ns, slab, g.plane(kV, v + 1) + slack);
+      if (ns == 0) continue;
+    }
+    float ulo = slab[0][kU], uhi = slab[0][kU];
+    for (int q = 1; q < ns; ++q) ulo = std::min(ulo, slab[q][kU]), uhi = std::max(uhi, slab[q][kU]);
+    const int u0 = std::max(r.lo[kU], g.cell_of(kU, ulo - slack)), u1 = std::min(r.hi[kU], g.cell_of(kU, uhi + slack));
+    for (int u = u0; u <= u1; ++u) {
+      const Vec3f* part = slab;
+      int nr = ns;
+      if (u0 != u1) {
+        nr = clip_polygon<kU, true>(slab, ns, tmp, g.plane(kU, u) - slack);
+        nr = clip_polygon<kU, false>(tmp, nr, part_in_line, g.plane(kU, u + 1) + slack);
+        if (nr == 0) continue;
+        part = part_in_line;
+      }
+      float wlo = part[0][kW], whi = part[0][kW];
+      for (int q = 1; q < nr; ++q) wlo = std::min(wlo, part[q][kW]), whi = std::max(whi, part[q][kW]);
+      const int w0 = std::max(r.lo[kW], g.cell_of(kW, wlo - slack)), w1 = std::min(r.hi[kW], g.cell_of(kW, whi + slack));
+      if (w0 <= w1) line(u, v, w0, w1);
+    }
+  }
+}
+
+/// Calls row(j, k, i_lo, i_hi) for the runs of cells along x, rows (j, k) in increasing order, of
+/// the cells for_each_clipped_line finds for a triangle with bounding-box cell range `r`. Lines
+/// run along the axis the range spans most cells of (the others are clipped to), so a tall blade
+/// of grass is clipped to its few columns instead of its many rows; lines not along x are
+/// gathered into one 64-bit mask of x-cells per row first. With at most one axis spanning
+/// several cells the cells are the range's (the triangle is connected), and nothing is clipped.
 template <class Row>
 inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
                                  Row&& row) {
-  const float slack = 2.0f * margin;
-  Vec3f slab[8], tmp[8], cell_row[8];
-  for (int k = r.lo[2]; k <= r.hi[2]; ++k) {
-    int ns = 3;
-    std::copy(tri, tri + 3, slab);
-    if (r.lo[2] != r.hi[2]) {
-      ns = clip_polygon(tri, 3, tmp, 2, g.plane(2, k) - slack, true);
-      ns = clip_polygon(tmp, ns, slab, 2, g.plane(2, k + 1) + slack, false);
-      if (ns == 0) continue;
-    }
-    float ylo = slab[0].y, yhi = slab[0].y;
-    for (int v = 1; v < ns; ++v) ylo = std::min(ylo, slab[v].y), yhi = std::max(yhi, slab[v].y);
-    const int jlo = std::max(r.lo[1], g.cell_of(1, ylo - slack)), jhi = std::min(r.hi[1], g.cell_of(1, yhi + slack));
-    for (int j = jlo; j <= jhi; ++j) {
-      const Vec3f* part = slab;
-      int nr = ns;
-      if (jlo != jhi) {
-        nr = clip_polygon(slab, ns, tmp, 1, g.plane(1, j) - slack, true);
-        nr = clip_polygon(tmp, nr, cell_row, 1, g.plane(1, j + 1) + slack, false);
-        if (nr == 0) continue;
-        part = cell_row;
-      }
-      float xlo = part[0].x, xhi = part[0].x;
-      for (int v = 1; v < nr; ++v) xlo = std::min(xlo, part[v].x), xhi = std::max(xhi, part[v].x);
-      const int ilo = std::max(r.lo[0], g.cell_of(0, xlo - slack)), ihi = std::min(r.hi[0], g.cell_of(0, xhi + slack));
-      if (ilo <= ihi) row(j, k, ilo, ihi);
-    }
+  const int nx = r.hi[0] - r.lo[0] + 1, ny = r.hi[1] - r.lo[1] + 1, nz = r.hi[2] - r.lo[2] + 1;
+  constexpr int kMaxRows = 256;
+  if ((nx > 1) + (ny > 1) + (nz > 1) <= 1) {
+    for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+      for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
+    return;
   }
+  if ((nx >= ny && nx >= nz) || nx > 64 || ny * nz > kMaxRows)
+    return for_each_clipped_line<2, 1, 0>(g, tri, r, margin, row);
+  std::uint64_t mask[kMaxRows];
+  std::fill(mask, mask + ny * nz, std::uint64_t{0});
+  auto row_mask = [&](int j, int k) -> std::uint64_t& { return mask[(k - r.lo[2]) * ny + (j - r.lo[1])]; };
+  if (ny >= nz)
+    for_each_clipped_line<2, 0, 1>(g, tri, r, margin, [&](int i, int k, int j0, int j1) {
+      for (int j = j0; j <= j1; ++j) row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
+    });
+  else
+    for_each_clipped_line<1, 0, 2>(g, tri, r, margin, [&](int i, int j, int k0, int k1) {
+      for (int k = k0; k <= k1; ++k) row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
+    });
+  for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+    for (int j = r.lo[1]; j <= r.hi[1]; ++j)
+      for (std::uint64_t m = row_mask(j, k); m != 0;) {
+        const int first = std::countr_zero(m), count = std::countr_one(m >> first);
+        row(j, k, r.lo[0] + first, r.lo[0] + first + count - 1);
+        m &= count == 64 ? 0 : ~(((std::uint64_t{1} << count) - 1) << first);
+      }
 }
 
 inline Bounds3f prim_bounds(const Scene& s, std::uint32_t prim) {
@@ -313,8 +357,11 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
                          ((std::size_t(r.hi[0] - r.lo[0]) + kLongestRun) / kLongestRun);
     }
     const std::size_t capacity = std::min(bbox_runs_total, 32 * n + cells);
-    run_first.reserve(capacity);
-    run_count.reserve(capacity);
+    run_first.resize(capacity);  // not written: BuildArray
+    run_count.resize(capacity);
+    std::uint32_t* const first_of = run_first.data();
+    std::uint8_t* const count_of = run_count.data();
+    std::size_t runs = 0;
     BuildArray<std::uint32_t> runs_end(n);  // primitive p's runs: [runs_end[p-1] (0 for p = 0), runs_end[p])
     bool recorded = true;
     std::size_t total = 0;
@@ -324,19 +371,26 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
         ++cursor[first];
         if (ihi + 1 < nx) --cursor[first + count];
         total += count;
+        if (count <= kLongestRun && runs < capacity) [[likely]] {
+          first_of[runs] = first;
+          count_of[runs++] = static_cast<std::uint8_t>(count);
+          return;
+        }
         for (std::uint32_t at = 0; recorded && at < count; at += kLongestRun) {
-          if (run_first.size() == capacity) {
+          if (runs == capacity) {
             recorded = false;
-            run_first = {};
-            run_count = {};
-            runs_end = {};
             break;
           }
-          run_first.push_back(first + at);
-          run_count.push_back(static_cast<std::uint8_t>(std::min(count - at, kLongestRun)));
+          first_of[runs] = first + at;
+          count_of[runs++] = static_cast<std::uint8_t>(std::min(count - at, kLongestRun));
         }
       });
-      if (recorded) runs_end[p] = static_cast<std::uint32_t>(run_first.size());
+      if (recorded) runs_end[p] = static_cast<std::uint32_t>(runs);
+    }
+    if (!recorded) {
+      run_first = {};
+      run_count = {};
+      runs_end = {};
     }
     check_ref_count(total);
     for (std::size_t base = 0; base < cells; base += std::size_t(nx))
