@@ -129,17 +129,28 @@ inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], c
     return for_each_clipped_line<2, 1, 0>(g, tri, r, margin, row);
   std::uint64_t mask[kMaxRows];
   std::fill(mask, mask + ny * nz, std::uint64_t{0});
+  // The rows of slab k that hold cells: row_lo[k - lo] .. row_hi[k - lo] (a thin, tilted triangle
+  // reaches few of its bounding box's rows in each slab).
+  int row_lo[kMaxRows], row_hi[kMaxRows];
+  std::fill(row_lo, row_lo + nz, r.hi[1] + 1);
+  std::fill(row_hi, row_hi + nz, r.lo[1] - 1);
   auto row_mask = [&](int j, int k) -> std::uint64_t& { return mask[(k - r.lo[2]) * ny + (j - r.lo[1])]; };
   if (ny >= nz)
     for_each_clipped_line<2, 0, 1>(g, tri, r, margin, [&](int i, int k, int j0, int j1) {
+      row_lo[k - r.lo[2]] = std::min(row_lo[k - r.lo[2]], j0);
+      row_hi[k - r.lo[2]] = std::max(row_hi[k - r.lo[2]], j1);
       for (int j = j0; j <= j1; ++j) row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
     });
   else
     for_each_clipped_line<1, 0, 2>(g, tri, r, margin, [&](int i, int j, int k0, int k1) {
-      for (int k = k0; k <= k1; ++k) row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
+      for (int k = k0; k <= k1; ++k) {
+        row_lo[k - r.lo[2]] = std::min(row_lo[k - r.lo[2]], j);
+        row_hi[k - r.lo[2]] = std::max(row_hi[k - r.lo[2]], j);
+        row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
+      }
     });
   for (int k = r.lo[2]; k <= r.hi[2]; ++k)
-    for (int j = r.lo[1]; j <= r.hi[1]; ++j)
+    for (int j = row_lo[k - r.lo[2]]; j <= row_hi[k - r.lo[2]]; ++j)
       for (std::uint64_t m = row_mask(j, k); m != 0;) {
         const int first = std::countr_zero(m), count = std::countr_one(m >> first);
         row(j, k, r.lo[0] + first, r.lo[0] + first + count - 1);
