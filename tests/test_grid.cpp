@@ -248,6 +248,8 @@ TEST(GridBuild, ClippedCellsLieBetweenExactAndBbox) {
       return v;
     };
     EXPECT_LT(clipped.refs.size(), bbox.refs.size()) << spec;
+    EXPECT_EQ(count_placed_references(*scene, g, GridPlacement::clipped, margin), clipped.refs.size()) << spec;
+    EXPECT_EQ(count_placed_references(*scene, g, GridPlacement::bbox, margin), bbox.refs.size()) << spec;
     for (std::size_t c = 0; c < g.cell_count(); ++c) {
       const auto e = cell_set(exact, c), k = cell_set(clipped, c), b = cell_set(bbox, c);
       ASSERT_TRUE(std::includes(k.begin(), k.end(), e.begin(), e.end())) << spec << ", cell " << c;

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 
 #include "geometry/exact_predicates.h"
@@ -125,7 +126,7 @@ inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], c
       for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
     return;
   }
-  if ((nx >= ny && nx >= nz) || nx > 64 || ny * nz > kMaxRows)
+  if ((nx >= ny && nx >= nz) || nx > 64 || std::int64_t(ny) * nz > kMaxRows)
     return for_each_clipped_line<2, 1, 0>(g, tri, r, margin, row);
   std::uint64_t mask[kMaxRows];
   std::fill(mask, mask + ny * nz, std::uint64_t{0});
@@ -443,6 +444,24 @@ CellLists place_primitives(const Scene& scene, const std::uint32_t* prims, std::
                            GridPlacement placement, float margin) {
   return place(scene, n, [prims](std::size_t p) { return prims[p]; }, grid, placement, margin,
                CellRefIds::primitive);
+}
+
+std::size_t count_placed_references(const Scene& scene, const GridGeometry& grid, GridPlacement placement,
+                                    float margin) {
+  if (placement == GridPlacement::exact) throw std::invalid_argument("count_placed_references: place=exact");
+  std::size_t total = 0;
+  const auto& v = scene.mesh.vertices;
+  for (std::uint32_t prim = 0; prim < scene.primitive_count(); ++prim) {
+    const CellRange r = cell_range(grid, prim_bounds(scene, prim), margin);
+    if (placement == GridPlacement::bbox || scene.is_sphere(prim)) {
+      total += std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+      continue;
+    }
+    const auto& t = scene.mesh.triangles[prim];
+    const Vec3f tri[3] = {v[t[0]], v[t[1]], v[t[2]]};
+    for_each_clipped_row(grid, tri, r, margin, [&](int, int, int ilo, int ihi) { total += std::size_t(ihi - ilo + 1); });
+  }
+  return total;
 }
 
 CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin,
