@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "geometry/exact_predicates.h"
 #include "geometry/input_error.h"
@@ -81,13 +82,32 @@ template <int kV, int kU, int kW, class Line>
 inline void for_each_clipped_line(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
                                   Line&& line) {
   const float slack = 2.0f * margin;
-  Vec3f slab[8], tmp[8], part_in_line[8];
+  // A clip that keeps every vertex returns its input, so it is skipped when the polygon's extent
+  // along the axis says so: float subtraction is monotone, so the extent decides it exactly (the
+  // first slab's or line's lower plane and the last one's upper plane, mostly).
+  auto clip_to = [](auto axis, const Vec3f* in, int n, float lo, float hi, float below, float above, Vec3f* tmp,
+                    Vec3f* out, const Vec3f*& part) {
+    constexpr int a = decltype(axis)::value;
+    part = in;
+    if (!(lo - below >= 0.0f)) {
+      n = clip_polygon<a, true>(part, n, tmp, below);
+      part = tmp;
+    }
+    if (!(above - hi >= 0.0f)) {
+      n = clip_polygon<a, false>(part, n, out, above);
+      part = out;
+    }
+    return n;
+  };
+  float vlo = tri[0][kV], vhi = tri[0][kV];
+  for (int q = 1; q < 3; ++q) vlo = std::min(vlo, tri[q][kV]), vhi = std::max(vhi, tri[q][kV]);
+  Vec3f slab_tmp[8], slab_buf[8], line_tmp[8], line_buf[8];  // a slab's part may stay in slab_tmp
   for (int v = r.lo[kV]; v <= r.hi[kV]; ++v) {
     int ns = 3;
-    std::copy(tri, tri + 3, slab);
+    const Vec3f* slab = tri;
     if (r.lo[kV] != r.hi[kV]) {
-      ns = clip_polygon<kV, true>(tri, 3, tmp, g.plane(kV, v) - slack);
-      ns = clip_polygon<kV, false>(tmp, ns, slab, g.plane(kV, v + 1) + slack);
+      ns = clip_to(std::integral_constant<int, kV>{}, tri, 3, vlo, vhi, g.plane(kV, v) - slack,
+                   g.plane(kV, v + 1) + slack, slab_tmp, slab_buf, slab);
       if (ns == 0) continue;
     }
     float ulo = slab[0][kU], uhi = slab[0][kU];
@@ -97,10 +117,9 @@ inline void for_each_clipped_line(const GridGeometry& g, const Vec3f (&tri)[3], 
       const Vec3f* part = slab;
       int nr = ns;
       if (u0 != u1) {
-        nr = clip_polygon<kU, true>(slab, ns, tmp, g.plane(kU, u) - slack);
-        nr = clip_polygon<kU, false>(tmp, nr, part_in_line, g.plane(kU, u + 1) + slack);
+        nr = clip_to(std::integral_constant<int, kU>{}, slab, ns, ulo, uhi, g.plane(kU, u) - slack,
+                     g.plane(kU, u + 1) + slack, line_tmp, line_buf, part);
         if (nr == 0) continue;
-        part = part_in_line;
       }
       float wlo = part[0][kW], whi = part[0][kW];
       for (int q = 1; q < nr; ++q) wlo = std::min(wlo, part[q][kW]), whi = std::max(whi, part[q][kW]);
