@@ -83,7 +83,8 @@ CellSequence cell_sequence(const CellLists& lists, std::size_t row_cells) {
   {
     BuildArray<std::uint32_t> at(start.begin(), start.end() - 1);
     for (std::size_t c = 0; c < s.cells; ++c)
-      for (std::uint32_t e = lists.offsets[c]; e < lists.offsets[c + 1]; ++e) cell_of[at[lists.refs[e]]++] = std::uint32_t(c);
+      for (std::uint32_t e = lists.offsets[c]; e < lists.offsets[c + 1]; ++e)
+        cell_of[at[lists.refs[e]]++] = std::uint32_t(c);
   }
   s.first.reserve(prims + 1);
   s.first.push_back(0);
@@ -103,8 +104,8 @@ CellSequence cell_sequence(const CellLists& lists, std::size_t row_cells) {
   return s;
 }
 
-/// Seconds (the thread's CPU time, best of three) of the passes every counting-sort build of
-/// `seq`'s references makes, and nothing else: allocate the offsets (zeroed) and the references
+/// Seconds (the thread's CPU time, best of three) of the counting-sort passes of a build of
+/// `seq`'s references, and nothing else: allocate the offsets (zeroed) and the references
 /// as the build does (BuildArrays); count the references of each cell, two updates per run (+1 at
 /// its first cell, -1 past its last, at random over the cell array) and a prefix sum along the
 /// rows, as the clipped build does (one increment per reference takes longer); prefix-sum the
@@ -474,7 +475,7 @@ int main(int argc, char** argv) {
             "has taken back costs far more to fault in again): no build that stores its references can be faster on "
             "this machine. *Floor, 4 KiB pages* "
             "is the same with plain operator new (issue 3's floor; on this VM a 4 KiB page fault costs ~3.5 ms per MB "
-            "first written). *Count + scatter floor* is the least work of a counting-sort build of the same "
+            "first written). *Count + scatter floor* is the work of the counting-sort passes of a build of the same "
             "references: the cell of every reference precomputed, in the order the build finds them (primitive by "
             "primitive, in its visiting order), and only its passes timed: allocate the offsets (zeroed) and the "
             "references as the build does, count the references of each cell with two updates per run of cells along "
@@ -486,8 +487,8 @@ int main(int argc, char** argv) {
             "difference array instead of 2 per run, and recomputes its cells from the triangles instead of "
             "reading them (a ratio near or below 1: counting and scattering are all it does). *Find cells* is the "
             "time to find every primitive's cells as the placement does (cell ranges; for clipped, the clipping), "
-            "in scene order, and only count them (count_placed_references, fastest of three). Goal on grass of a million blades: build ≤ 2× floor at d = 3 "
-            "and d = 1 (the first floor).\n\n| scene | primitives | accelerator | build s | M primitives/s | "
+            "in scene order, and only count them (count_placed_references, fastest of three). Goal on grass of a "
+            "million blades: build ≤ 2× floor at d = 3 and d = 1 (the first floor).\n\n| scene | primitives | accelerator | build s | M primitives/s | "
             "references per primitive | floor s | build / floor | floor s, 4 KiB pages | build / that floor | count + "
             "scatter floor s | build / that floor | find cells s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
       std::vector<Case> build_cases = {big, cases[1], cases[2]};
@@ -516,7 +517,8 @@ int main(int argc, char** argv) {
             const double n = static_cast<double>(c.scene->primitive_count());
             m.bytes = grid->stats().bytes;
             m.nodes = grid->stats().nodes;
-            const CellSequence seq = uniform ? cell_sequence(uniform->cells(), std::size_t(uniform->geometry().res[0])) : CellSequence{};
+            const CellSequence seq =
+                uniform ? cell_sequence(uniform->cells(), std::size_t(uniform->geometry().res[0])) : CellSequence{};
             const GridGeometry geometry = uniform ? uniform->geometry() : GridGeometry{};
             grid.reset();
             csv.row("goal_build", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
@@ -528,9 +530,11 @@ int main(int argc, char** argv) {
             double find_cells_s = 1e300;
             for (int rep = 0; rep < 3 && uniform; ++rep)
               find_cells_s = std::min(find_cells_s, thread_cpu_seconds_of([&] {
-                const std::size_t found = count_placed_references(*c.scene, geometry, place == std::string("bbox") ? GridPlacement::bbox : GridPlacement::clipped,
-                                                                  grid_margin(c.scene->bounds()));
-                if (found != static_cast<std::size_t>(refs)) throw std::logic_error("exp_grids: cells found != cells placed");
+                const GridPlacement placement = place == std::string("bbox") ? GridPlacement::bbox : GridPlacement::clipped;
+                const std::size_t found =
+                    count_placed_references(*c.scene, geometry, placement, grid_margin(c.scene->bounds()));
+                if (found != static_cast<std::size_t>(refs))
+                  throw std::logic_error("exp_grids: cells found != cells placed");
               }));
             if (!uniform) find_cells_s = 0.0;
             csv.row("goal_build_floor", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0, 0.0,
@@ -545,7 +549,8 @@ int main(int argc, char** argv) {
             auto ratio = [&](double floor) {
               return floor < 1e-3 ? std::string("–") : fmt::format("{:.1f}", m.build_s / floor);
             };
-            md += fmt::format("| {} | {} | `{}` | {:.3f} | {:.1f} | {:.1f} | {:.3f} | {} | {:.3f} | {} | {:.3f} | {} | {:.3f} |\n",
+            md += fmt::format("| {} | {} | `{}` | {:.3f} | {:.1f} | {:.1f} | {:.3f} | {} | {:.3f} | {} | {:.3f} | {} | "
+                              "{:.3f} |\n",
                               c.label, c.scene->primitive_count(), spec, m.build_s, n / m.build_s / 1e6, refs / n,
                               floor_s, ratio(floor_s), floor_4k_s, ratio(floor_4k_s), count_scatter_s,
                               ratio(count_scatter_s), find_cells_s);
