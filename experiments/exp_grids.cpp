@@ -88,6 +88,8 @@ CellSequence cell_sequence(const CellLists& lists, std::size_t row_cells) {
   }
   s.first.reserve(prims + 1);
   s.first.push_back(0);
+  s.run_cell.reserve(s.refs);  // address space: runs are at most the references
+  s.run_length.reserve(s.refs);
   for (std::size_t p = 0; p < prims; ++p) {
     for (std::uint32_t e = start[p]; e < start[p + 1]; ++e) {
       const std::uint32_t c = cell_of[e];
