@@ -69,7 +69,9 @@ struct CellSequence {
   BuildArray<std::uint8_t> run_length;
 };
 
-/// The cell lists of a grid with rows of `row_cells` cells, transposed into their cell sequence.
+/// The cell lists of a grid with rows of `row_cells` cells, transposed into their cell sequence:
+/// two walks over the cells in increasing order (so each primitive meets its cells in increasing
+/// order), the first counting every primitive's runs, the second writing them.
 CellSequence cell_sequence(const CellLists& lists, std::size_t row_cells) {
   CellSequence s;
   s.cells = lists.offsets.size() - 1;
@@ -77,32 +79,44 @@ CellSequence cell_sequence(const CellLists& lists, std::size_t row_cells) {
   s.refs = lists.refs.size();
   std::size_t prims = 0;
   for (const std::uint32_t r : lists.refs) prims = std::max<std::size_t>(prims, std::size_t(r) + 1);
-  BuildArray<std::uint32_t> start(prims + 1, 0), cell_of(lists.refs.size());
-  for (const std::uint32_t r : lists.refs) ++start[r + 1];
-  for (std::size_t p = 0; p < prims; ++p) start[p + 1] += start[p];
-  {
-    BuildArray<std::uint32_t> at(start.begin(), start.end() - 1);
-    for (std::size_t c = 0; c < s.cells; ++c)
-      for (std::uint32_t e = lists.offsets[c]; e < lists.offsets[c + 1]; ++e)
-        cell_of[at[lists.refs[e]]++] = std::uint32_t(c);
-  }
-  s.first.reserve(prims + 1);
-  s.first.push_back(0);
-  s.run_cell.reserve(s.refs);  // address space: runs are at most the references
-  s.run_length.reserve(s.refs);
-  for (std::size_t p = 0; p < prims; ++p) {
-    for (std::uint32_t e = start[p]; e < start[p + 1]; ++e) {
-      const std::uint32_t c = cell_of[e];
-      const bool extends = e > start[p] && c == cell_of[e - 1] + 1 && c % row_cells != 0 && s.run_length.back() < 255;
-      if (extends) {
-        ++s.run_length.back();
+  constexpr std::uint32_t kNone = 0xfffffffeu;  // last + 1 is no cell
+  BuildArray<std::uint32_t> last(prims, kNone);
+  BuildArray<std::uint8_t> length(prims, 0);
+  // Whether cell c continues primitive p's current run (same row, consecutive, under 256 cells).
+  auto extends = [&](std::uint32_t p, std::uint32_t c) {
+    return last[p] + 1 == c && c % row_cells != 0 && length[p] < 255;
+  };
+  s.first.assign(prims + 1, 0);
+  for (std::uint32_t c = 0; c < s.cells; ++c)
+    for (std::uint32_t e = lists.offsets[c]; e < lists.offsets[c + 1]; ++e) {
+      const std::uint32_t p = lists.refs[e];
+      if (extends(p, c)) {
+        ++length[p];
       } else {
-        s.run_cell.push_back(c);
-        s.run_length.push_back(1);
+        ++s.first[p + 1];
+        length[p] = 1;
       }
+      last[p] = c;
     }
-    s.first.push_back(std::uint32_t(s.run_cell.size()));
-  }
+  for (std::size_t p = 0; p < prims; ++p) s.first[p + 1] += s.first[p];
+  s.run_cell.resize(s.first[prims]);
+  s.run_length.resize(s.first[prims]);
+  BuildArray<std::uint32_t> next(s.first.begin(), s.first.end() - 1);  // the index of p's next run
+  std::fill(last.begin(), last.end(), kNone);
+  std::fill(length.begin(), length.end(), std::uint8_t{0});
+  for (std::uint32_t c = 0; c < s.cells; ++c)
+    for (std::uint32_t e = lists.offsets[c]; e < lists.offsets[c + 1]; ++e) {
+      const std::uint32_t p = lists.refs[e];
+      if (extends(p, c)) {
+        ++length[p];
+        ++s.run_length[next[p] - 1];
+      } else {
+        s.run_cell[next[p]] = c;
+        s.run_length[next[p]++] = 1;
+        length[p] = 1;
+      }
+      last[p] = c;
+    }
   return s;
 }
 
