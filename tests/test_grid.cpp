@@ -224,13 +224,15 @@ TEST(GridBuild, CopiedTrianglesMapBackToThePlacedPrimitives) {
 
 // Clipped placement keeps every cell exact placement keeps (the cells the triangle meets, widened by
 // the margin) and no cell outside the bounding box's: per cell, exact ⊆ clipped ⊆ bbox as sets, on
-// tilted thin blades, a soup of random triangles, long needles and axis-aligned walls. The last
-// soup's large triangles have more rows than clipped placement records in its one clipping pass
-// (32 per triangle plus one per cell, grid_placement.cpp): its fill clips them again.
+// tilted thin blades (upright, whose lines of cells run along y, and lying along z), a soup of random
+// triangles, long needles and axis-aligned walls. The last soup's large triangles have more rows
+// than clipped placement records in its one clipping pass (32 per triangle plus one per cell,
+// grid_placement.cpp): its fill clips them again.
 TEST(GridBuild, ClippedCellsLieBetweenExactAndBbox) {
   for (const auto& [spec, density] : std::vector<std::pair<std::string, double>>{
-           {"grass:blades=800,height=0.4,width=0.03", 4.0}, {"soup:n=800", 4.0}, {"needles:n=150", 4.0},
-           {"walls:n=20", 4.0}, {"walls:n=20,angle=0", 4.0}, {"soup:n=1000,size=1", 2.6}}) {
+           {"grass:blades=800,height=0.4,width=0.03", 4.0},
+           {"transformed:of=(grass:blades=800,height=0.4,width=0.03),rotate=x:90", 4.0}, {"soup:n=800", 4.0},
+           {"needles:n=150", 4.0}, {"walls:n=20", 4.0}, {"walls:n=20,angle=0", 4.0}, {"soup:n=1000,size=1", 2.6}}) {
     const auto scene = make_scene(spec);
     const float margin = grid_margin(scene->bounds());
     const Bounds3f box = widened(scene->bounds(), margin);
@@ -246,6 +248,8 @@ TEST(GridBuild, ClippedCellsLieBetweenExactAndBbox) {
       return v;
     };
     EXPECT_LT(clipped.refs.size(), bbox.refs.size()) << spec;
+    EXPECT_EQ(count_placed_references(*scene, g, GridPlacement::clipped, margin), clipped.refs.size()) << spec;
+    EXPECT_EQ(count_placed_references(*scene, g, GridPlacement::bbox, margin), bbox.refs.size()) << spec;
     for (std::size_t c = 0; c < g.cell_count(); ++c) {
       const auto e = cell_set(exact, c), k = cell_set(clipped, c), b = cell_set(bbox, c);
       ASSERT_TRUE(std::includes(k.begin(), k.end(), e.begin(), e.end())) << spec << ", cell " << c;

@@ -4,7 +4,9 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "geometry/exact_predicates.h"
 #include "geometry/input_error.h"
@@ -44,63 +46,136 @@ inline CellRange cell_range(const GridGeometry& g, const Bounds3f& b, float marg
   return r;
 }
 
-/// Sutherland-Hodgman: the part of the convex polygon in[0, n) with x[axis] >= bound (keep_above)
+/// Sutherland-Hodgman: the part of the convex polygon in[0, n) with x[kAxis] >= bound (kKeepAbove)
 /// or <= bound, written to out (at most n + 1 vertices); returns its vertex count.
-inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, int axis, float bound, bool keep_above) {
+template <int kAxis, bool kKeepAbove>
+inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, float bound) {
+  auto side = [bound](const Vec3f& v) { return kKeepAbove ? v[kAxis] - bound : bound - v[kAxis]; };
   int m = 0;
+  float da = side(in[0]);
   for (int i = 0; i < n; ++i) {
     const Vec3f& a = in[i];
     const Vec3f& b = in[i + 1 == n ? 0 : i + 1];
-    const float da = keep_above ? a[axis] - bound : bound - a[axis];
-    const float db = keep_above ? b[axis] - bound : bound - b[axis];
+    const float db = side(b);
     if (da >= 0.0f) out[m++] = a;
     if ((da < 0.0f) != (db < 0.0f)) {
       const float t = std::clamp(da / (da - db), 0.0f, 1.0f);
       Vec3f p = a + (b - a) * t;
-      p[axis] = bound;
+      p[kAxis] = bound;
       out[m++] = p;
     }
+    da = db;
   }
   return m;
 }
 
-/// Calls row(j, k, i_lo, i_hi) for the rows of cells (j, k) of range `r` that a triangle's part
-/// in them reaches, with the x-range of cells that part spans: the triangle clipped to each
-/// slab k widened by 2·margin, then to each row j widened by 2·margin, and the part's y- and
-/// x-extents widened by 2·margin. The extra margin covers the float rounding of the clipping (a
-/// few ulps of the coordinates, far below the margin), so the rows and ranges include every
-/// cell whose box widened by `margin` the triangle meets (and lie within the bounding box's).
+/// Calls line(u, v, w_lo, w_hi) for the lines of cells along axis kW (cells u along kU, v along kV)
+/// of range `r` that a triangle's part in them reaches, with the range of cells along kW that part
+/// spans: the triangle clipped to each slab v along kV widened by 2·margin, then to each line u
+/// along kU widened by 2·margin, and the part's kU- and kW-extents widened by 2·margin. The extra
+/// margin covers the float rounding of the clipping (a few ulps of the coordinates, far below the
+/// margin), so the lines and ranges include every cell whose box widened by `margin` the triangle
+/// meets (and lie within the bounding box's). In exact arithmetic these are the cells whose box
+/// widened by 2·margin the triangle meets, whatever the axes (the triangle's part in a line is
+/// convex, so it spans whole ranges), which leaves the axes free: the fewer lines, the fewer clips.
+template <int kV, int kU, int kW, class Line>
+inline void for_each_clipped_line(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
+                                  Line&& line) {
+  const float slack = 2.0f * margin;
+  // A clip that keeps every vertex returns its input, so it is skipped when the polygon's extent
+  // along the axis says so: float subtraction is monotone, so the extent decides it exactly (the
+  // first slab's or line's lower plane and the last one's upper plane, mostly).
+  auto clip_to = [](auto axis, const Vec3f* in, int n, float lo, float hi, float below, float above, Vec3f* tmp,
+                    Vec3f* out, const Vec3f*& part) {
+    constexpr int a = decltype(axis)::value;
+    part = in;
+    if (!(lo - below >= 0.0f)) {
+      n = clip_polygon<a, true>(part, n, tmp, below);
+      part = tmp;
+    }
+    if (!(above - hi >= 0.0f)) {
+      n = clip_polygon<a, false>(part, n, out, above);
+      part = out;
+    }
+    return n;
+  };
+  float vlo = tri[0][kV], vhi = tri[0][kV];
+  for (int q = 1; q < 3; ++q) vlo = std::min(vlo, tri[q][kV]), vhi = std::max(vhi, tri[q][kV]);
+  Vec3f slab_tmp[8], slab_buf[8], line_tmp[8], line_buf[8];  // a slab's part may stay in slab_tmp
+  for (int v = r.lo[kV]; v <= r.hi[kV]; ++v) {
+    int ns = 3;
+    const Vec3f* slab = tri;
+    if (r.lo[kV] != r.hi[kV]) {
+      ns = clip_to(std::integral_constant<int, kV>{}, tri, 3, vlo, vhi, g.plane(kV, v) - slack,
+                   g.plane(kV, v + 1) + slack, slab_tmp, slab_buf, slab);
+      if (ns == 0) continue;
+    }
+    float ulo = slab[0][kU], uhi = slab[0][kU];
+    for (int q = 1; q < ns; ++q) ulo = std::min(ulo, slab[q][kU]), uhi = std::max(uhi, slab[q][kU]);
+    const int u0 = std::max(r.lo[kU], g.cell_of(kU, ulo - slack)), u1 = std::min(r.hi[kU], g.cell_of(kU, uhi + slack));
+    for (int u = u0; u <= u1; ++u) {
+      const Vec3f* part = slab;
+      int nr = ns;
+      if (u0 != u1) {
+        nr = clip_to(std::integral_constant<int, kU>{}, slab, ns, ulo, uhi, g.plane(kU, u) - slack,
+                     g.plane(kU, u + 1) + slack, line_tmp, line_buf, part);
+        if (nr == 0) continue;
+      }
+      float wlo = part[0][kW], whi = part[0][kW];
+      for (int q = 1; q < nr; ++q) wlo = std::min(wlo, part[q][kW]), whi = std::max(whi, part[q][kW]);
+      const int w0 = std::max(r.lo[kW], g.cell_of(kW, wlo - slack)), w1 = std::min(r.hi[kW], g.cell_of(kW, whi + slack));
+      if (w0 <= w1) line(u, v, w0, w1);
+    }
+  }
+}
+
+/// Calls row(j, k, i_lo, i_hi) for the runs of cells along x, rows (j, k) in increasing order, of
+/// the cells for_each_clipped_line finds for a triangle with bounding-box cell range `r`. Lines
+/// run along the axis the range spans most cells of (the others are clipped to), so a tall blade
+/// of grass is clipped to its few columns instead of its many rows; lines not along x are
+/// gathered into one 64-bit mask of x-cells per row first. With at most one axis spanning
+/// several cells the cells are the range's (the triangle is connected), and nothing is clipped.
 template <class Row>
 inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
                                  Row&& row) {
-  const float slack = 2.0f * margin;
-  Vec3f slab[8], tmp[8], cell_row[8];
-  for (int k = r.lo[2]; k <= r.hi[2]; ++k) {
-    int ns = 3;
-    std::copy(tri, tri + 3, slab);
-    if (r.lo[2] != r.hi[2]) {
-      ns = clip_polygon(tri, 3, tmp, 2, g.plane(2, k) - slack, true);
-      ns = clip_polygon(tmp, ns, slab, 2, g.plane(2, k + 1) + slack, false);
-      if (ns == 0) continue;
-    }
-    float ylo = slab[0].y, yhi = slab[0].y;
-    for (int v = 1; v < ns; ++v) ylo = std::min(ylo, slab[v].y), yhi = std::max(yhi, slab[v].y);
-    const int jlo = std::max(r.lo[1], g.cell_of(1, ylo - slack)), jhi = std::min(r.hi[1], g.cell_of(1, yhi + slack));
-    for (int j = jlo; j <= jhi; ++j) {
-      const Vec3f* part = slab;
-      int nr = ns;
-      if (jlo != jhi) {
-        nr = clip_polygon(slab, ns, tmp, 1, g.plane(1, j) - slack, true);
-        nr = clip_polygon(tmp, nr, cell_row, 1, g.plane(1, j + 1) + slack, false);
-        if (nr == 0) continue;
-        part = cell_row;
-      }
-      float xlo = part[0].x, xhi = part[0].x;
-      for (int v = 1; v < nr; ++v) xlo = std::min(xlo, part[v].x), xhi = std::max(xhi, part[v].x);
-      const int ilo = std::max(r.lo[0], g.cell_of(0, xlo - slack)), ihi = std::min(r.hi[0], g.cell_of(0, xhi + slack));
-      if (ilo <= ihi) row(j, k, ilo, ihi);
-    }
+  const int nx = r.hi[0] - r.lo[0] + 1, ny = r.hi[1] - r.lo[1] + 1, nz = r.hi[2] - r.lo[2] + 1;
+  constexpr int kMaxRows = 256;
+  if ((nx > 1) + (ny > 1) + (nz > 1) <= 1) {
+    for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+      for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
+    return;
   }
+  if ((nx >= ny && nx >= nz) || nx > 64 || std::int64_t(ny) * nz > kMaxRows)
+    return for_each_clipped_line<2, 1, 0>(g, tri, r, margin, row);
+  std::uint64_t mask[kMaxRows];
+  std::fill(mask, mask + ny * nz, std::uint64_t{0});
+  // The rows of slab k that hold cells: row_lo[k - lo] .. row_hi[k - lo] (a thin, tilted triangle
+  // reaches few of its bounding box's rows in each slab).
+  int row_lo[kMaxRows], row_hi[kMaxRows];
+  std::fill(row_lo, row_lo + nz, r.hi[1] + 1);
+  std::fill(row_hi, row_hi + nz, r.lo[1] - 1);
+  auto row_mask = [&](int j, int k) -> std::uint64_t& { return mask[(k - r.lo[2]) * ny + (j - r.lo[1])]; };
+  if (ny >= nz)
+    for_each_clipped_line<2, 0, 1>(g, tri, r, margin, [&](int i, int k, int j0, int j1) {
+      row_lo[k - r.lo[2]] = std::min(row_lo[k - r.lo[2]], j0);
+      row_hi[k - r.lo[2]] = std::max(row_hi[k - r.lo[2]], j1);
+      for (int j = j0; j <= j1; ++j) row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
+    });
+  else
+    for_each_clipped_line<1, 0, 2>(g, tri, r, margin, [&](int i, int j, int k0, int k1) {
+      for (int k = k0; k <= k1; ++k) {
+        row_lo[k - r.lo[2]] = std::min(row_lo[k - r.lo[2]], j);
+        row_hi[k - r.lo[2]] = std::max(row_hi[k - r.lo[2]], j);
+        row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
+      }
+    });
+  for (int k = r.lo[2]; k <= r.hi[2]; ++k)
+    for (int j = row_lo[k - r.lo[2]]; j <= row_hi[k - r.lo[2]]; ++j)
+      for (std::uint64_t m = row_mask(j, k); m != 0;) {
+        const int first = std::countr_zero(m), count = std::countr_one(m >> first);
+        row(j, k, r.lo[0] + first, r.lo[0] + first + count - 1);
+        m &= count == 64 ? 0 : ~(((std::uint64_t{1} << count) - 1) << first);
+      }
 }
 
 inline Bounds3f prim_bounds(const Scene& s, std::uint32_t prim) {
@@ -313,8 +388,11 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
                          ((std::size_t(r.hi[0] - r.lo[0]) + kLongestRun) / kLongestRun);
     }
     const std::size_t capacity = std::min(bbox_runs_total, 32 * n + cells);
-    run_first.reserve(capacity);
-    run_count.reserve(capacity);
+    run_first.resize(capacity);  // not written: BuildArray
+    run_count.resize(capacity);
+    std::uint32_t* const first_of = run_first.data();
+    std::uint8_t* const count_of = run_count.data();
+    std::size_t runs = 0;
     BuildArray<std::uint32_t> runs_end(n);  // primitive p's runs: [runs_end[p-1] (0 for p = 0), runs_end[p])
     bool recorded = true;
     std::size_t total = 0;
@@ -324,19 +402,26 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
         ++cursor[first];
         if (ihi + 1 < nx) --cursor[first + count];
         total += count;
+        if (count <= kLongestRun && runs < capacity) [[likely]] {
+          first_of[runs] = first;
+          count_of[runs++] = static_cast<std::uint8_t>(count);
+          return;
+        }
         for (std::uint32_t at = 0; recorded && at < count; at += kLongestRun) {
-          if (run_first.size() == capacity) {
+          if (runs == capacity) {
             recorded = false;
-            run_first = {};
-            run_count = {};
-            runs_end = {};
             break;
           }
-          run_first.push_back(first + at);
-          run_count.push_back(static_cast<std::uint8_t>(std::min(count - at, kLongestRun)));
+          first_of[runs] = first + at;
+          count_of[runs++] = static_cast<std::uint8_t>(std::min(count - at, kLongestRun));
         }
       });
-      if (recorded) runs_end[p] = static_cast<std::uint32_t>(run_first.size());
+      if (recorded) runs_end[p] = static_cast<std::uint32_t>(runs);
+    }
+    if (!recorded) {
+      run_first = {};
+      run_count = {};
+      runs_end = {};
     }
     check_ref_count(total);
     for (std::size_t base = 0; base < cells; base += std::size_t(nx))
@@ -378,6 +463,24 @@ CellLists place_primitives(const Scene& scene, const std::uint32_t* prims, std::
                            GridPlacement placement, float margin) {
   return place(scene, n, [prims](std::size_t p) { return prims[p]; }, grid, placement, margin,
                CellRefIds::primitive);
+}
+
+std::size_t count_placed_references(const Scene& scene, const GridGeometry& grid, GridPlacement placement,
+                                    float margin) {
+  if (placement == GridPlacement::exact) throw std::invalid_argument("count_placed_references: place=exact");
+  std::size_t total = 0;
+  const auto& v = scene.mesh.vertices;
+  for (std::uint32_t prim = 0; prim < scene.primitive_count(); ++prim) {
+    const CellRange r = cell_range(grid, prim_bounds(scene, prim), margin);
+    if (placement == GridPlacement::bbox || scene.is_sphere(prim)) {
+      total += std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+      continue;
+    }
+    const auto& t = scene.mesh.triangles[prim];
+    const Vec3f tri[3] = {v[t[0]], v[t[1]], v[t[2]]};
+    for_each_clipped_row(grid, tri, r, margin, [&](int, int, int ilo, int ihi) { total += std::size_t(ihi - ilo + 1); });
+  }
+  return total;
 }
 
 CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin,

@@ -45,4 +45,9 @@ CellLists place_primitives(const Scene& scene, const std::uint32_t* prims, std::
 CellLists place_all_primitives(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin,
                                CellRefIds ids = CellRefIds::primitive);
 
+/// The number of references place_all_primitives stores with placement bbox or clipped (exact
+/// is not supported and throws std::invalid_argument), the primitives' cells found as placement
+/// finds them, in scene order, and only counted: the cost of finding the cells alone.
+std::size_t count_placed_references(const Scene& scene, const GridGeometry& grid, GridPlacement placement, float margin);
+
 }  // namespace raylab
