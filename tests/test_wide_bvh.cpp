@@ -1,8 +1,7 @@
 // The wide BVH (lib/accel/bvh/wide_bvh*.h, simd_box_test.h, packed_triangles*.h): the collapse
 // keeps every reference and nests boxes; the SIMD box test is intersect_box lane by lane; the
 // packed watertight kernel is the scalar WatertightKernel bit for bit; any-hit agrees with
-// closest hit, and the wide trees find the binary tree's closest t. Compressed nodes decode to
-// boxes that contain the exact ones, and their SIMD test is the scalar test of the decoded box.
+// closest hit, and the wide trees find the binary tree's closest t.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,7 +10,6 @@
 #include <random>
 
 #include "accel/bvh/bvh.h"
-#include "accel/bvh/compressed_wide_bvh.h"
 #include "accel/bvh/packed_triangles_simd.h"
 #include "accel/bvh/simd_box_test.h"
 #include "accel/bvh/wide_bvh.h"
@@ -394,112 +392,6 @@ TEST(WideBvh, HugeDirectionComponentsUnderFlushToZeroNeverHitEmptyLanes) {
   alignas(32) float entry[8];
   EXPECT_EQ((WideBoxRay<8, true>(ray).hit(node, ray.tmax, entry) >> 1), 0u);
   EXPECT_EQ((WideBoxRay<8, false>(ray).hit(node, ray.tmax, entry) >> 1), 0u);
-}
-
-
-/// Every decoded child box of the compressed tree contains the exact (full) node's child box,
-/// node for node, and unused lanes stay unused.
-template <int N>
-void check_compressed_contains_exact(const Scene& scene, const Bvh2& tree) {
-  const WideBvh<N> full = collapse_bvh<N>(tree, scene);
-  WideBvh<N> copy = full;
-  const CompressedWideBvh<N> compressed = compress_wide_bvh(std::move(copy));
-  ASSERT_EQ(compressed.nodes.size(), full.nodes.size());
-  ASSERT_EQ(compressed.packets.size(), full.packets.size());
-  std::size_t loose = 0, planes = 0;
-  for (std::size_t k = 0; k < full.nodes.size(); ++k) {
-    const WideBvhNode<N>& f = full.nodes[k];
-    const CompressedWideBvhNode<N>& c = compressed.nodes[k];
-    ASSERT_EQ(c.used, f.used);
-    for (int i = 0; i < static_cast<int>(f.used); ++i) {
-      ASSERT_EQ(c.child[i], f.child[i]);
-      const Bounds3f exact = f.box(i), decoded = c.box(i);
-      ASSERT_TRUE(box_contains(decoded, exact)) << "node " << k << " lane " << i;
-      for (int a = 0; a < 3; ++a) {
-        // No looser than two cells of the node's grid on either side.
-        const float cell = c.cell[a];
-        EXPECT_LE(exact.lo[a] - decoded.lo[a], 2.0f * cell) << "node " << k << " lane " << i;
-        EXPECT_LE(decoded.hi[a] - exact.hi[a], 2.0f * cell) << "node " << k << " lane " << i;
-        loose += decoded.lo[a] != exact.lo[a];
-        ++planes;
-      }
-    }
-  }
-  EXPECT_GT(loose, 0u);  // the quantisation is really in effect
-  EXPECT_LT(loose, planes);
-}
-
-TEST(CompressedWideBvh, DecodedBoxesContainTheExactChildBoxes) {
-  for (const char* spec : {"cgal:armadillo", "transformed:of=cgal:armadillo,rotate=1;2;3:37,translate=1e4:-1e4:1e4",
-                           "transformed:of=cgal:armadillo,scale=1e-4", "transformed:of=(walls:n=12,angle=30),scale=1e-4,"
-                           "translate=3e4:0:0", "sphereflake:depth=2"}) {
-    const auto scene = make_scene(spec);
-    BvhConfig config;
-    config.max_leaf_size = 8;
-    config.threads = 1;
-    const Bvh2 tree = build_bvh(*scene, config);
-    SCOPED_TRACE(spec);
-    check_compressed_contains_exact<8>(*scene, tree);
-  }
-}
-
-/// Child boxes at every magnitude (denormal, tiny, ~1, 1e4 away, 1e30), flat and point boxes:
-/// the decoded box contains each, and the SIMD tests of a compressed node are the scalar
-/// intersect_box (robust) and never miss a box the exact ray hits well inside (fast) on the
-/// decoded boxes, under the tracer's FTZ/DAZ.
-template <int N>
-void check_compressed_node(std::mt19937& rng) {
-  const FloatModeScope tracer_mode(true);
-  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  const float magnitudes[] = {1e-38f, 1e-30f, 1e-4f, 1.0f, 1e4f, 1e30f};
-  std::uniform_int_distribution<int> pick(0, 5);
-  int hits = 0;
-  for (int trial = 0; trial < 4000; ++trial) {
-    BoxCase c = random_box_case(rng, N);
-    const float offset = magnitudes[pick(rng)] * unit(rng), extent = magnitudes[pick(rng)];
-    WideBvh<N> wide;
-    wide.nodes.resize(1);
-    WideBvhNode<N>& node = wide.nodes[0];
-    node.used = 1 + trial % N;
-    for (int i = 0; i < N; ++i) {
-      Bounds3f& b = c.boxes[i];
-      for (int a = 0; a < 3; ++a) {
-        b.lo[a] = offset + b.lo[a] * extent;
-        b.hi[a] = offset + b.hi[a] * extent;
-        node.bounds[a][i] = i < static_cast<int>(node.used) ? b.lo[a] : std::numeric_limits<float>::infinity();
-        node.bounds[3 + a][i] = i < static_cast<int>(node.used) ? b.hi[a] : -std::numeric_limits<float>::infinity();
-      }
-    }
-    const CompressedWideBvh<N> compressed = compress_wide_bvh(std::move(wide));
-    const CompressedWideBvhNode<N>& q = compressed.nodes[0];
-    const int used = q.used;
-    for (int i = 0; i < used; ++i) ASSERT_TRUE(box_contains(q.box(i), c.boxes[i])) << "trial " << trial << " lane " << i;
-    // A ray through the scaled case: origin and target mapped as the boxes were.
-    Ray ray = c.ray;
-    for (int a = 0; a < 3; ++a) ray.org[a] = offset + ray.org[a] * extent;
-    if (!is_finite(ray.org)) continue;
-    alignas(32) float entry[N];
-    const unsigned mask = WideBoxRay<N, true>(ray).hit(q, ray.tmax, entry);
-    ASSERT_EQ(mask >> used, 0u) << "trial " << trial;
-    const Vec3f inv = safe_inverse(ray.dir);
-    for (int i = 0; i < used; ++i) {
-      float t0 = 0, t1 = 0;
-      const bool scalar = intersect_box(q.box(i), ray, inv, ray.tmin, ray.tmax, t0, t1);
-      ASSERT_EQ(scalar, ((mask >> i) & 1u) != 0) << "trial " << trial << " lane " << i;
-      if (scalar) {
-        ++hits;
-        ASSERT_EQ(t0, entry[i]) << "trial " << trial << " lane " << i;
-      }
-    }
-    const WideBoxRay<N, false> fast(ray);
-    ASSERT_EQ(fast.hit(q, ray.tmax, entry) >> used, 0u) << "trial " << trial;
-  }
-  EXPECT_GT(hits, 500);
-}
-
-TEST(CompressedWideBvh, NodesAtEveryMagnitudeContainTheirBoxesAndTestAsTheScalarSlabTest) {
-  std::mt19937 rng(23);
-  check_compressed_node<8>(rng);
 }
 
 }  // namespace

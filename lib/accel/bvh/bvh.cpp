@@ -12,15 +12,10 @@ Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
     : scene_(std::move(scene)), config_(config), tree_(build_bvh(*scene_, config_)), bounds_(scene_->bounds()) {
   build_sah_cost_ = bvh_sah_cost(tree_, config_.cost);
   if (config_.width == 4) wide4_ = collapse_bvh<4>(tree_, *scene_);
-  if (config_.width == 8) {
-    wide8_ = collapse_bvh<8>(tree_, *scene_);
-    if (config_.nodes == WideNodeLayout::compressed) compressed8_ = compress_wide_bvh(std::move(wide8_));
-  }
+  if (config_.width == 8) wide8_ = collapse_bvh<8>(tree_, *scene_);
 }
 
 AccelStats Bvh::stats() const {
-  if (config_.nodes == WideNodeLayout::compressed)
-    return {compressed8_.bytes(), compressed8_.nodes.size(), build_sah_cost_};
   if (config_.width == 4) return {wide4_.bytes(), wide4_.nodes.size(), build_sah_cost_};
   if (config_.width == 8) return {wide8_.bytes(), wide8_.nodes.size(), build_sah_cost_};
   return {tree_.nodes.size() * sizeof(Bvh2Node) + tree_.prims.size() * sizeof(std::uint32_t), tree_.nodes.size(),
@@ -35,7 +30,6 @@ namespace {
 
 const std::vector<std::string> kBuilders = {"midpoint", "median", "sweep", "binned", "spatial"};
 const std::vector<std::string> kWidths = {"2", "4", "8"};
-const std::vector<std::string> kNodeLayouts = {"full", "compressed"};
 
 std::vector<ParamDoc> bvh_params() {
   return {{"builder", "binned",
@@ -48,7 +42,6 @@ std::vector<ParamDoc> bvh_params() {
           {"alpha", "1e-5", "SBVH: try spatial splits where child overlap exceeds alpha * SA(root)"},
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
           {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
-          {"nodes", "full", "width=8: full (float child boxes) | compressed (8-bit boxes on a per-node grid)"},
           {"robust", "on", "on: Ize's conservative box test + watertight kernel | off: the fast variant"},
           kernel_param_doc(),
           {"threads", "0", "build threads; 0 = all"}};
@@ -84,9 +77,6 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.cost.leaf_block = c.width == 2 ? 1u : static_cast<unsigned>(kPacketWidth);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
-  c.nodes = r.get_choice("nodes", "full", kNodeLayouts) == "full" ? WideNodeLayout::full : WideNodeLayout::compressed;
-  if (c.nodes == WideNodeLayout::compressed && c.width != 8)
-    throw InputError("accelerator '" + r.spec().text + "': nodes=compressed needs width=8");
   c.robust = r.get_bool("robust", true);
   c.kernel = read_kernel_choice(r);
   if (c.kernel == KernelChoice::certified && !c.robust)
@@ -124,8 +114,7 @@ AccelKind make_bvh_kind() {
           {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
            "builder=sweep", "cost=default", "width=2,cost=default", "kernel=certified", "kernel=certified,width=4",
-           "kernel=certified,width=2", "nodes=compressed", "nodes=compressed,robust=off",
-           "nodes=compressed,kernel=certified"}};
+           "kernel=certified,width=2"}};
 }
 
 namespace {

@@ -10,7 +10,6 @@
 
 #include "accel/bvh/bvh_build.h"
 #include "accel/bvh/bvh_traversal.h"
-#include "accel/bvh/compressed_wide_bvh.h"
 #include "accel/bvh/packed_triangles_simd.h"
 #include "accel/bvh/wide_bvh_traversal.h"
 #include "accel/common/accel_factory.h"
@@ -29,11 +28,9 @@ class Bvh final : public AggregateBase<Bvh> {
   std::optional<std::uint64_t> structure_hash() const override;
 
   const Bvh2& tree() const { return tree_; }
-  /// The traversed wide trees: filled only when config().width is 4 or 8 respectively, the
-  /// 8-wide one compressed (and wide8() empty) with nodes=compressed.
+  /// The traversed wide trees: filled only when config().width is 4 or 8 respectively.
   const WideBvh<4>& wide4() const { return wide4_; }
   const WideBvh<8>& wide8() const { return wide8_; }
-  const CompressedWideBvh<8>& compressed8() const { return compressed8_; }
   const BvhConfig& config() const { return config_; }
 
   template <class Counters>
@@ -58,10 +55,7 @@ class Bvh final : public AggregateBase<Bvh> {
   template <class Kernel, bool kRobust, bool kAnyHit, class Counters>
   bool trace(const Ray& ray, Hit& hit, Counters& counters) const {
     if (tree_.nodes.empty()) return false;
-    const bool compressed = config_.nodes == WideNodeLayout::compressed;
-    if (config_.width == 8)
-      return compressed ? trace_wide<Kernel, kRobust, kAnyHit>(compressed8_, ray, hit, counters)
-                        : trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
+    if (config_.width == 8) return trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
     if (config_.width == 4) return trace_wide<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
     typename Kernel::Context ctx = Kernel::prepare(ray);
     const Scene& scene = *scene_;
@@ -81,8 +75,8 @@ class Bvh final : public AggregateBase<Bvh> {
         });
   }
 
-  template <class Kernel, bool kRobust, bool kAnyHit, class Wide, class Counters>
-  bool trace_wide(const Wide& wide, const Ray& ray, Hit& hit, Counters& counters) const {
+  template <class Kernel, bool kRobust, bool kAnyHit, int N, class Counters>
+  bool trace_wide(const WideBvh<N>& wide, const Ray& ray, Hit& hit, Counters& counters) const {
     // For closest-hit queries the kernel's per-ray setup (three divisions for the watertight
     // shear) waits for the first leaf: many rays (diffuse rays leaving a convex part) reach none.
     // Shadow rays mostly do, and measure faster with the setup done up front.
@@ -96,7 +90,7 @@ class Bvh final : public AggregateBase<Bvh> {
     const Scene& scene = *scene_;
     const TrianglePacket* packets = wide.packets.data();
     float closest = initial_closest<Kernel>(ray);
-    return traverse_wide_bvh<kRobust, kAnyHit>(
+    return traverse_wide_bvh<N, kRobust, kAnyHit>(
         wide.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
           if (!prepared) {
             ctx = Kernel::prepare(ray);  // ctx's closest is ray.tmax: no leaf has hit yet
@@ -115,7 +109,6 @@ class Bvh final : public AggregateBase<Bvh> {
   Bvh2 tree_;
   WideBvh<4> wide4_;  ///< filled when config_.width == 4
   WideBvh<8> wide8_;  ///< filled when config_.width == 8
-  CompressedWideBvh<8> compressed8_;  ///< filled instead of wide8_ with nodes=compressed
   Bounds3f bounds_;
   double build_sah_cost_ = 0.0;
 };

@@ -32,12 +32,6 @@ inline unsigned bvh_leaf_units(std::size_t n, unsigned block) {
   return static_cast<unsigned>((n + block - 1) & ~static_cast<std::size_t>(block - 1));
 }
 
-/// How a wide tree stores its children's boxes.
-enum class WideNodeLayout {
-  full,        ///< six float planes per child (wide_bvh.h): 256 bytes per 8-wide node
-  compressed,  ///< 8-bit planes on a per-node grid (compressed_wide_bvh.h): 128 bytes per 8-wide node
-};
-
 struct BvhConfig {
   BvhBuilder builder = BvhBuilder::binned;
   /// Children per node of the traversed tree: 2 (BVH2, the lecture's stack traversal) or a wide
@@ -47,8 +41,6 @@ struct BvhConfig {
   /// default is 4 at width 2, 16 (four triangle packets) for the SAH builders at width 8, and 8
   /// (two packets) otherwise.
   int max_leaf_size = 4;
-  /// The node layout of the 8-wide tree (compressed needs width 8).
-  WideNodeLayout nodes = WideNodeLayout::full;
   /// The most SAH bins per axis (binned and spatial builders): small nodes use fewer (4 + n/20,
   /// as Embree), and spatial splits use half as many.
   int bins = 32;

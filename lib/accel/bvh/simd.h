@@ -2,8 +2,7 @@
 /// The few SIMD float operations the wide BVH needs, N = 4 (SSE) or 8 (AVX; two SSE halves
 /// where the target has no AVX). Every operation is the IEEE operation of its scalar
 /// counterpart, lane by lane, so code written with them rounds exactly as scalar code does,
-/// with two exceptions: `fmsub` fuses (only the fast variants use it; `fmadd` too, which the
-/// compressed nodes' decoding uses where the product is exact, so fused and unfused agree), and min/max keep the
+/// with two exceptions: `fmsub` fuses (only the fast variants use it), and min/max keep the
 /// operand order of SSE (`min(a, b) = a < b ? a : b`, `max(a, b) = a > b ? a : b`, so a NaN in
 /// either yields b), which the robust box test relies on to mirror intersect_box's branches.
 #include <immintrin.h>
@@ -20,12 +19,6 @@ struct Float<4> {
   __m128 v;
   static Float load(const float* p) { return {_mm_load_ps(p)}; }
   static Float broadcast(float x) { return {_mm_set1_ps(x)}; }
-  /// Lanes converted from 4 unsigned bytes (exactly: every byte is a float).
-  static Float from_bytes(const std::uint8_t* p) {
-    std::int32_t word;
-    __builtin_memcpy(&word, p, sizeof word);
-    return {_mm_cvtepi32_ps(_mm_cvtepu8_epi32(_mm_cvtsi32_si128(word)))};
-  }
   void store(float* p) const { _mm_store_ps(p, v); }
   friend Float operator+(Float a, Float b) { return {_mm_add_ps(a.v, b.v)}; }
   friend Float operator-(Float a, Float b) { return {_mm_sub_ps(a.v, b.v)}; }
@@ -39,14 +32,6 @@ struct Float<4> {
     return {_mm_fmsub_ps(a.v, b.v, c.v)};
 #else
     return {_mm_sub_ps(_mm_mul_ps(a.v, b.v), c.v)};
-#endif
-  }
-  /// a·b + c, fused where the target has FMA.
-  friend Float fmadd(Float a, Float b, Float c) {
-#if defined(__FMA__)
-    return {_mm_fmadd_ps(a.v, b.v, c.v)};
-#else
-    return {_mm_add_ps(_mm_mul_ps(a.v, b.v), c.v)};
 #endif
   }
   friend Float abs(Float a) { return {_mm_andnot_ps(_mm_set1_ps(-0.0f), a.v)}; }
@@ -76,14 +61,6 @@ struct Float<8> {
     return {_mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(lo)), _mm_load_ps(hi), 1)};
   }
   static Float broadcast(float x) { return {_mm256_set1_ps(x)}; }
-  /// Lanes converted from 8 unsigned bytes (exactly: every byte is a float).
-  static Float from_bytes(const std::uint8_t* p) {
-#if defined(__AVX2__)
-    return {_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))))};
-#else
-    return {_mm256_insertf128_ps(_mm256_castps128_ps256(Float<4>::from_bytes(p).v), Float<4>::from_bytes(p + 4).v, 1)};
-#endif
-  }
   void store(float* p) const { _mm256_store_ps(p, v); }
   friend Float operator+(Float a, Float b) { return {_mm256_add_ps(a.v, b.v)}; }
   friend Float operator-(Float a, Float b) { return {_mm256_sub_ps(a.v, b.v)}; }
@@ -96,13 +73,6 @@ struct Float<8> {
     return {_mm256_fmsub_ps(a.v, b.v, c.v)};
 #else
     return {_mm256_sub_ps(_mm256_mul_ps(a.v, b.v), c.v)};
-#endif
-  }
-  friend Float fmadd(Float a, Float b, Float c) {
-#if defined(__FMA__)
-    return {_mm256_fmadd_ps(a.v, b.v, c.v)};
-#else
-    return {_mm256_add_ps(_mm256_mul_ps(a.v, b.v), c.v)};
 #endif
   }
   friend Float abs(Float a) { return {_mm256_andnot_ps(_mm256_set1_ps(-0.0f), a.v)}; }
@@ -145,7 +115,6 @@ struct Float<8> {
   static Float load(const float* p) { return {Float<4>::load(p), Float<4>::load(p + 4)}; }
   static Float load_halves(const float* lo, const float* hi) { return {Float<4>::load(lo), Float<4>::load(hi)}; }
   static Float broadcast(float x) { return {Float<4>::broadcast(x), Float<4>::broadcast(x)}; }
-  static Float from_bytes(const std::uint8_t* p) { return {Float<4>::from_bytes(p), Float<4>::from_bytes(p + 4)}; }
   void store(float* p) const { lo.store(p); hi.store(p + 4); }
   friend Float operator+(Float a, Float b) { return {a.lo + b.lo, a.hi + b.hi}; }
   friend Float operator-(Float a, Float b) { return {a.lo - b.lo, a.hi - b.hi}; }
@@ -154,7 +123,6 @@ struct Float<8> {
   friend Float min(Float a, Float b) { return {min(a.lo, b.lo), min(a.hi, b.hi)}; }
   friend Float max(Float a, Float b) { return {max(a.lo, b.lo), max(a.hi, b.hi)}; }
   friend Float fmsub(Float a, Float b, Float c) { return {fmsub(a.lo, b.lo, c.lo), fmsub(a.hi, b.hi, c.hi)}; }
-  friend Float fmadd(Float a, Float b, Float c) { return {fmadd(a.lo, b.lo, c.lo), fmadd(a.hi, b.hi, c.hi)}; }
   friend Float abs(Float a) { return {abs(a.lo), abs(a.hi)}; }
   friend Float sign_bits(Float a) { return {sign_bits(a.lo), sign_bits(a.hi)}; }
   friend Float operator^(Float a, Float b) { return {a.lo ^ b.lo, a.hi ^ b.hi}; }

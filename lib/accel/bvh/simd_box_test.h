@@ -12,7 +12,6 @@
 #include <cmath>
 #include <limits>
 
-#include "accel/bvh/compressed_wide_bvh.h"
 #include "accel/bvh/simd.h"
 #include "accel/bvh/wide_bvh.h"
 #include "geometry/bounds.h"
@@ -54,28 +53,7 @@ struct WideBoxRay<N, true> {
   /// Bit i set when child i of `node` is hit on [tmin, tmax]; entry distances go to `entry`
   /// (32-byte aligned).
   [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
-    return hit_planes([&](int k, int) { return F::load(node.bounds[k]); }, kAllLanes, (1u << node.used) - 1, tmax, entry);
-  }
-
-  /// As above on the decoded boxes of a compressed node, which contain the exact child boxes
-  /// (compressed_wide_bvh.h): the decoding origin + q·cell is exact in its product and rounds
-  /// once, fused or not, as decode_compressed_plane does. Unused lanes are masked.
-  [[gnu::always_inline]] unsigned hit(const CompressedWideBvhNode<N>& node, float tmax, float* entry) const {
-    const F origin[3] = {F::broadcast(node.origin[0]), F::broadcast(node.origin[1]), F::broadcast(node.origin[2])};
-    const F cell[3] = {F::broadcast(node.cell[0]), F::broadcast(node.cell[1]), F::broadcast(node.cell[2])};
-    const unsigned used = (1u << node.used) - 1;
-    return hit_planes([&](int k, int a) { return fmadd(F::from_bytes(node.planes[k]), cell[a], origin[a]); }, used,
-                      used, tmax, entry);
-  }
-
- private:
-  static constexpr unsigned kAllLanes = (1u << N) - 1;
-
-  /// The test on the planes `plane(k, axis)` (k: lo x, y, z, hi x, y, z), `lanes` masking the result
-  /// where no component of the direction is zero, `used` where one is.
-  template <class Planes>
-  [[gnu::always_inline]] unsigned hit_planes(const Planes& plane, unsigned lanes, unsigned used, float tmax,
-                                             float* entry) const {
+    const float (*bounds)[N] = node.bounds;
     if (finite_inverse) {
       // No component of the direction is zero: rounding is monotone, so lo <= hi gives
       // (lo - o)·inv <= (hi - o)·inv for inv > 0 and >= for inv < 0, and no product is NaN;
@@ -84,26 +62,26 @@ struct WideBoxRay<N, true> {
       // gives near = +inf, far = -inf and misses.
       F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
       for (int a = 0; a < 3; ++a) {
-        t0 = max((plane(near[a], a) - org[a]) * inv[a], t0);
-        far_min = min((plane(far[a], a) - org[a]) * inv[a], far_min);
+        t0 = max((F::load(bounds[near[a]]) - org[a]) * inv[a], t0);
+        far_min = min((F::load(bounds[far[a]]) - org[a]) * inv[a], far_min);
       }
       const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
       t0.store(entry);
-      return (t0 <= t1) & lanes;
+      return t0 <= t1;
     }
     // intersect_box scales each far distance and takes min(far·s, t1) per axis; rounding is
     // monotone, so min over axes of far·s equals (min over axes of far)·s, NaN lanes skipped
     // alike (the running minimum starts at +inf, and +inf·s = +inf leaves t1 unchanged).
     F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a) {
-      const F tn = (plane(a, a) - org[a]) * inv[a];
-      const F tf = (plane(3 + a, a) - org[a]) * inv[a];
+      const F tn = (F::load(bounds[a]) - org[a]) * inv[a];
+      const F tf = (F::load(bounds[3 + a]) - org[a]) * inv[a];
       t0 = max(min(tf, tn), t0);        // near = tn > tf ? tf : tn; near > t0 ? near : t0 (NaN keeps t0)
       far_min = min(max(tn, tf), far_min);  // far = tn > tf ? tn : tf; NaN keeps the running minimum
     }
     const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
     t0.store(entry);
-    return (t0 <= t1) & used;  // an inverted slab is swapped: mask empty lanes
+    return (t0 <= t1) & ((1u << node.used) - 1);  // an inverted slab is swapped: mask empty lanes
   }
 };
 
@@ -133,23 +111,6 @@ struct WideBoxRay<N, false> {
     for (int a = 0; a < 3; ++a) {
       t0 = max(fmsub(F::load(bounds[near[a]]), inv[a], org_inv[a]), t0);
       t1 = min(fmsub(F::load(bounds[far[a]]), inv[a], org_inv[a]), t1);
-    }
-    t0.store(entry);
-    return (t0 <= t1) & ((1u << node.used) - 1);
-  }
-
-  /// As above on a compressed node, with the decoding folded into the plane distance as in
-  /// Ylitie et al. 2017: t = q·(cell·inv) + (origin·inv - org·inv), one FMA per plane.
-  [[gnu::always_inline]] unsigned hit(const CompressedWideBvhNode<N>& node, float tmax, float* entry) const {
-    F scale[3], offset[3];
-    for (int a = 0; a < 3; ++a) {
-      scale[a] = F::broadcast(node.cell[a]) * inv[a];
-      offset[a] = fmsub(F::broadcast(node.origin[a]), inv[a], org_inv[a]);
-    }
-    F t0 = F::broadcast(tmin), t1 = F::broadcast(tmax);
-    for (int a = 0; a < 3; ++a) {
-      t0 = max(fmadd(F::from_bytes(node.planes[near[a]]), scale[a], offset[a]), t0);
-      t1 = min(fmadd(F::from_bytes(node.planes[far[a]]), scale[a], offset[a]), t1);
     }
     t0.store(entry);
     return (t0 <= t1) & ((1u << node.used) - 1);

@@ -36,7 +36,6 @@ struct WideRef {
 template <int N>
 struct alignas(64) WideBvhNode {
   static_assert(N == 4 || N == 8);
-  static constexpr int kWidth = N;
   /// bounds[0..2]: lo x, y, z; bounds[3..5]: hi x, y, z. Unused lanes hold empty boxes
   /// (+inf, -inf), which the box tests miss by plane choice; where the robust test mirrors
   /// intersect_box's swap (a zero direction component) it masks them with `used` instead.
