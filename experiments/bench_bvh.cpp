@@ -12,7 +12,7 @@
 //      nodes, leaves, tests per ray (counted pass)
 //   build/experiments/bench_bvh --benchmark_min_time=0.1
 //   build/experiments/bench_bvh --benchmark_filter='armadillo/diffuse'
-//   RAYLAB_BENCH_BVH_SPECS='bvh;bvh:nodes=full' build/experiments/bench_bvh   (other specs)
+//   RAYLAB_BENCH_BVH_SPECS='bvh;bvh:width=4' build/experiments/bench_bvh   (other specs, ';'-separated)
 #include <benchmark/benchmark.h>
 #include <time.h>
 
