@@ -2,13 +2,19 @@
 /// One ray against the N child boxes of a wide node at once.
 ///
 ///  - WideBoxRay<N, true>: Ize's conservative slab test (Ize, "Robust BVH Ray Traversal", JCGT
-///    2013) lane by lane exactly as intersect_box (bounds.h) computes it: t = (bound - org)·inv
-///    with a separate multiply, the far distance scaled by kIzeFarScale, and min/max operand
-///    orders that reproduce intersect_box's branches, NaN (0·inf) lanes included. So a lane is
-///    hit exactly when intersect_box accepts that box, with the same entry distance (up to the
-///    sign of a zero).
+///    2013). Where no direction component is zero (or flushed), each plane distance is one FMA,
+///    t = bound·inv - c, with c = org·inv rounded and then moved by 4u·|c| (u = 2^-24; at least
+///    2^-126) away from the box: up for near planes, down for far ones, so c covers the exact
+///    org·inv, and the near distance is at most (bound - org)·inv computed exactly and rounded
+///    once, the far one at least it. Each is then within a factor (1 ± u)^2 of the exact distance with the exact
+///    1/d, and Ize's far factor 1 + 2γ3 (> (1 + u)^2 / (1 - u)^2, rounding included) keeps every
+///    box the exact ray meets; entries exceed the exact ones by at most (1 + u)^2 (intersect_box:
+///    (1 + u)^3). Otherwise (a zero component) lane by lane exactly as intersect_box computes it:
+///    t = (bound - org)·inv, the far distance scaled by kIzeFarScale, min/max operand orders that
+///    reproduce intersect_box's branches, NaN (0·inf) lanes included.
 ///  - WideBoxRay<N, false>: the fast slab test, near/far planes chosen by the direction's signs,
 ///    t = bound·inv - org·inv fused; may reject a box the ray touches within rounding.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -28,25 +34,45 @@ struct WideBoxRay;
 template <int N>
 struct WideBoxRay<N, true> {
   using F = simd::Float<N>;
-  F org[3], inv[3];
+  F inv[3];
+  F org_inv_near[3], org_inv_far[3];  ///< c for near and far planes (see above)
+  float org[3];  ///< broadcast only on the rare path with a zero component
   int near[3], far[3];
-  bool finite_inverse;
+  bool fused;  ///< every inverse finite and non-zero, every c finite: the FMA test applies
   float tmin;
 
   explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
     // safe_inverse as one division: d + 0 turns -0 into +0, and IEEE 1/+0 is +inf.
-    alignas(16) float i[4];
+    alignas(16) float i[4], c_near[4], c_far[4];
     const __m128 d = _mm_add_ps(_mm_setr_ps(r.dir.x, r.dir.y, r.dir.z, 1.0f), _mm_setzero_ps());
-    _mm_store_ps(i, _mm_div_ps(_mm_set1_ps(1.0f), d));
-    finite_inverse = true;
+    const __m128 iv = _mm_div_ps(_mm_set1_ps(1.0f), d);
+    // fl(c + p) >= c + p - u·|c + p| >= c + 2.9u·|c|, beyond the exact org·inv (within u·|c| of
+    // c, or 2^-126 where FTZ flushed it); likewise below. Lane 3 (org 0, inverse 1) is finite.
+    const __m128 c = _mm_mul_ps(_mm_setr_ps(r.org.x, r.org.y, r.org.z, 0.0f), iv);
+    const __m128 pad = _mm_max_ps(_mm_mul_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), c), _mm_set1_ps(0x1p-22f)),
+                                  _mm_set1_ps(std::numeric_limits<float>::min()));
+    const __m128 cn = _mm_add_ps(c, pad), cf = _mm_sub_ps(c, pad);
+    _mm_store_ps(i, iv);
+    _mm_store_ps(c_near, cn);
+    _mm_store_ps(c_far, cf);
+    // Under FTZ, |d| > 2^126 gives a flushed inverse of 0, and (±inf - o)·0 = NaN would keep an
+    // empty lane's t0 at tmin: such rays take the masked path as zero components do, as do rays
+    // whose c overflows. |x| < inf is false for ±inf and NaN.
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), abs_mask = _mm_set1_ps(-0.0f);
+    const auto finite = [&](__m128 x) { return _mm_cmplt_ps(_mm_andnot_ps(abs_mask, x), inf); };
+    const __m128 ok = _mm_and_ps(_mm_and_ps(finite(iv), _mm_cmpneq_ps(iv, _mm_setzero_ps())),
+                                 _mm_and_ps(finite(cn), finite(cf)));
+    fused = _mm_movemask_ps(ok) == 0xF;
+#if !defined(__FMA__)
+    fused = false;  // bound·inv must not round on its own
+#endif
     for (int a = 0; a < 3; ++a) {
-      org[a] = F::broadcast(r.org[a]);
+      org[a] = r.org[a];
       inv[a] = F::broadcast(i[a]);
+      org_inv_near[a] = F::broadcast(c_near[a]);
+      org_inv_far[a] = F::broadcast(c_far[a]);
       near[a] = i[a] >= 0.0f ? a : 3 + a;
       far[a] = i[a] >= 0.0f ? 3 + a : a;
-      // Under FTZ, |d| > 2^126 gives a flushed inverse of 0, and (±inf - o)·0 = NaN would keep an
-      // empty lane's t0 at tmin: such rays take the masked path as zero components do.
-      finite_inverse = finite_inverse && std::isfinite(i[a]) && i[a] != 0.0f;
     }
   }
 
@@ -54,16 +80,13 @@ struct WideBoxRay<N, true> {
   /// (32-byte aligned).
   [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
     const float (*bounds)[N] = node.bounds;
-    if (finite_inverse) {
-      // No component of the direction is zero: rounding is monotone, so lo <= hi gives
-      // (lo - o)·inv <= (hi - o)·inv for inv > 0 and >= for inv < 0, and no product is NaN;
-      // intersect_box's swap is then the choice of planes by the sign of inv (equal distances
-      // may differ in the sign of a zero, which no comparison sees). An empty lane (+inf, -inf)
-      // gives near = +inf, far = -inf and misses.
+    if (fused) {
+      // No component of the direction is zero: the planes are chosen by the sign of inv, and no
+      // distance is NaN. An empty lane (+inf, -inf) gives near = +inf, far = -inf and misses.
       F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
       for (int a = 0; a < 3; ++a) {
-        t0 = max((F::load(bounds[near[a]]) - org[a]) * inv[a], t0);
-        far_min = min((F::load(bounds[far[a]]) - org[a]) * inv[a], far_min);
+        t0 = max(fmsub(F::load(bounds[near[a]]), inv[a], org_inv_near[a]), t0);
+        far_min = min(fmsub(F::load(bounds[far[a]]), inv[a], org_inv_far[a]), far_min);
       }
       const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
       t0.store(entry);
@@ -74,8 +97,9 @@ struct WideBoxRay<N, true> {
     // alike (the running minimum starts at +inf, and +inf·s = +inf leaves t1 unchanged).
     F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a) {
-      const F tn = (F::load(bounds[a]) - org[a]) * inv[a];
-      const F tf = (F::load(bounds[3 + a]) - org[a]) * inv[a];
+      const F o = F::broadcast(org[a]);
+      const F tn = (F::load(bounds[a]) - o) * inv[a];
+      const F tf = (F::load(bounds[3 + a]) - o) * inv[a];
       t0 = max(min(tf, tn), t0);        // near = tn > tf ? tf : tn; near > t0 ? near : t0 (NaN keeps t0)
       far_min = min(max(tn, tf), far_min);  // far = tn > tf ? tn : tf; NaN keeps the running minimum
     }
