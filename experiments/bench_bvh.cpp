@@ -22,6 +22,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "bench_env.h"
 #include "embree_direct.h"
 #include "geometry/float_mode.h"
 #include "scene/scene_spec.h"
@@ -109,24 +110,10 @@ void BM_BvhTrace(benchmark::State& state, const std::string& scene_spec, const s
   state.counters["tests"] = static_cast<double>(counted.counters.prim_tests) / n;
 }
 
-/// kBvhSpecs, or the specs listed in RAYLAB_BENCH_BVH_SPECS, separated by ';' (to A/B options).
-std::vector<std::string> bvh_specs() {
-  const char* env = std::getenv("RAYLAB_BENCH_BVH_SPECS");
-  if (env == nullptr || *env == '\0') return kBvhSpecs;
-  std::vector<std::string> specs;
-  std::string text(env);
-  for (std::size_t start = 0; start <= text.size();) {
-    const std::size_t end = std::min(text.find(';', start), text.size());
-    if (end > start) specs.push_back(text.substr(start, end - start));
-    start = end + 1;
-  }
-  return specs;
-}
-
 const bool registered = [] {
   for (const auto& s : kScenes)
     for (const auto& r : kRayKinds)
-      for (const auto& a : bvh_specs())
+      for (const auto& a : accelerator_specs_from_env("RAYLAB_BENCH_BVH_SPECS", kBvhSpecs))
         benchmark::RegisterBenchmark(("BM_BvhTrace/" + s + "/" + rays_on(s, r) + "/" + a).c_str(), BM_BvhTrace, s,
                                      rays_on(s, r), a)
             ->Unit(benchmark::kMillisecond)

@@ -25,6 +25,7 @@
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
 #include "scene/scene_spec.h"
+#include "bench_env.h"
 
 using namespace raylab;
 
@@ -42,14 +43,14 @@ std::shared_ptr<const Scene> scene_for(const std::string& spec) {
 
 /// The kd-tree spec BM_KdTrace measures: $RAYLAB_KD_SPEC, or the default `kdtree`.
 std::string kd_spec() {
-  const char* env = std::getenv("RAYLAB_KD_SPEC");
-  return env != nullptr && *env != '\0' ? env : "kdtree";
+  static const std::string spec = accelerator_specs_from_env("RAYLAB_KD_SPEC", {"kdtree"}).front();
+  return spec;
 }
 
 /// The spec BM_KdTrace compares against, $RAYLAB_KD_BASE, or empty.
 std::string kd_base_spec() {
-  const char* env = std::getenv("RAYLAB_KD_BASE");
-  return env != nullptr ? env : "";
+  static const std::string spec = accelerator_specs_from_env("RAYLAB_KD_BASE", {""}).front();
+  return spec;
 }
 
 /// A single-threaded trace pass's time: wall time, or with $RAYLAB_KD_CPU_TIME=1 the tracing

@@ -1,0 +1,40 @@
+#pragma once
+/// Accelerator specs a benchmark binary takes from the environment, checked before any benchmark
+/// runs (the benchmarks themselves would end on an uncaught InputError).
+#include <algorithm>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "accel/common/accel_factory.h"
+#include "geometry/input_error.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+
+/// The ';'-separated accelerator specs in $`variable`, or `fallback` when it is unset or empty.
+/// Each is built once over a 20-triangle sphere first: a spec the factory rejects ends the program
+/// with one `error:` line naming the variable, and exit status 2.
+inline std::vector<std::string> accelerator_specs_from_env(const char* variable, std::vector<std::string> fallback) {
+  const char* env = std::getenv(variable);
+  if (env == nullptr || *env == '\0') return fallback;
+  std::vector<std::string> specs;
+  const std::string text(env);
+  for (std::size_t start = 0; start <= text.size();) {
+    const std::size_t end = std::min(text.find(';', start), text.size());
+    if (end > start) specs.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  try {
+    if (specs.empty()) throw InputError("no accelerator spec");
+    const auto probe = make_scene("sphere:n=20");
+    for (const auto& spec : specs) make_accelerator(spec, probe);
+  } catch (const InputError& e) {
+    std::cerr << "error: $" << variable << ": " << e.what() << "\n";
+    std::exit(2);
+  }
+  return specs;
+}
+
+}  // namespace raylab
