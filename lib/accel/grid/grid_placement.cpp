@@ -35,6 +35,10 @@ namespace {
 
 struct CellRange {
   int lo[3], hi[3];
+  /// The cells of the range (each hi >= lo).
+  std::size_t cell_count() const {
+    return std::size_t(hi[0] - lo[0] + 1) * std::size_t(hi[1] - lo[1] + 1) * std::size_t(hi[2] - lo[2] + 1);
+  }
 };
 
 inline CellRange cell_range(const GridGeometry& g, const Bounds3f& b, float margin) {
@@ -314,11 +318,8 @@ CellLists place(const Scene& scene, std::size_t n, PrimAt prim_at, const GridGeo
     // sums along x, y and z. Arithmetic is modulo 2^32, exact for counts below 2^32
     // (check_ref_count).
     std::uint32_t* cursor = out.offsets.data();
-    auto volume = [](const CellRange& r) {
-      return std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
-    };
     std::size_t total = 0;
-    for (std::size_t p = 0; p < n; ++p) total += volume(range_of(p));
+    for (std::size_t p = 0; p < n; ++p) total += range_of(p).cell_count();
     check_ref_count(total);
     const int nx = g.res[0], ny = g.res[1], nz = g.res[2];
     if (total > 8 * n + 3 * cells) {
@@ -473,7 +474,7 @@ std::size_t count_placed_references(const Scene& scene, const GridGeometry& grid
   for (std::uint32_t prim = 0; prim < scene.primitive_count(); ++prim) {
     const CellRange r = cell_range(grid, prim_bounds(scene, prim), margin);
     if (placement == GridPlacement::bbox || scene.is_sphere(prim)) {
-      total += std::size_t(r.hi[0] - r.lo[0] + 1) * std::size_t(r.hi[1] - r.lo[1] + 1) * std::size_t(r.hi[2] - r.lo[2] + 1);
+      total += r.cell_count();
       continue;
     }
     const auto& t = scene.mesh.triangles[prim];
