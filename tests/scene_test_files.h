@@ -188,6 +188,17 @@ inline std::vector<BadSceneFile> write_bad_scene_files(const std::string& dir) {
   FbxRecord nest{"N", {}, {}};
   for (int i = 0; i < 300; ++i) nest = FbxRecord{"N", {}, {nest}};
   write("deep_binary.fbx", fbx_binary({nest}), "nested deeper than 256");
+  // Assimp 5.2.5 aborts (an assertion) when a 64-bit record's property length wraps its pointer
+  // (found by fuzz_scene_import): version 7500, one record "A" with one property 'C' whose
+  // property list claims 2^64 - 16 bytes.
+  std::string wrapping("Kaydara FBX Binary  \0\x1a\0", 23);
+  auto u64 = [&](std::uint64_t v) { wrapping.append(reinterpret_cast<const char*>(&v), 8); };
+  wrapping.append("\x4c\x1d\0\0", 4);
+  const std::uint64_t record_end = 27 + 25 + 1 + 2;
+  u64(record_end), u64(1), u64(~std::uint64_t{15});
+  wrapping += "\x01" "A" "C\x01";
+  wrapping.append(25 + 16, '\0');
+  write("wrapping_property_length.fbx", wrapping, "run past the record's end at byte 55");
   // Assimp 5.2.5 aborts (an assertion) on a Model property of type KTime, valid as it is (found
   // by fuzz_scene_import), in a Model's own properties or in the Model template.
   write("ktime_ascii.fbx",

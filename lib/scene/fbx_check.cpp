@@ -68,8 +68,14 @@ void check_binary(const std::string& path, std::string_view data) {
     }
     const std::uint64_t properties = read_le(data, static_cast<std::size_t>(pos + 2 * word), word);
     const std::uint64_t name_length = static_cast<unsigned char>(data[static_cast<std::size_t>(pos + 3 * word)]);
-    const std::uint64_t first = pos + record_header + name_length, nested = first + properties;
-    if (end <= pos || end > data.size() || properties > data.size() || nested > end) return;  // Assimp reports it
+    const std::uint64_t first = pos + record_header + name_length;
+    if (end <= pos || end > data.size())
+      throw InputError(path + ": binary FBX record at byte " + std::to_string(pos) + " ends at byte " + std::to_string(end) +
+                       ", not between its start and the end of the file (" + std::to_string(data.size()) + " bytes)");
+    if (first > end || properties > end - first)
+      throw InputError(path + ": binary FBX record at byte " + std::to_string(pos) + ": its name and property list (" +
+                       std::to_string(properties) + " bytes) run past the record's end at byte " + std::to_string(end));
+    const std::uint64_t nested = first + properties;
     const std::string_view name = data.substr(static_cast<std::size_t>(pos + record_header), static_cast<std::size_t>(name_length));
     std::string_view strings[2];  // P: the property's name and type
     binary_strings(data, first, nested, strings);
