@@ -497,7 +497,7 @@ int main(int argc, char** argv) {
             "references as the build does, count the references of each cell with two updates per run of cells along "
             "a row (as the clipped build does: fewer than one increment per reference), prefix-sum the counts, write "
             "each reference at its cell's cursor (fastest of three). What the clipped build spends beyond it is "
-            "finding the cells (clipping each triangle to lines of cells), ordering the primitives and copying "
+            "finding the cells (clipping each triangle to slabs of cells and scan-converting it into their rows), ordering the primitives and copying "
             "their triangles, and the first touch of its other arrays (the triangle copy, the recorded runs). "
             "The bbox build can beat this floor: it counts each primitive's box with 8 updates of a 3D "
             "difference array instead of 2 per run, and recomputes its cells from the triangles instead of "

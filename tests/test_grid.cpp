@@ -224,10 +224,12 @@ TEST(GridBuild, CopiedTrianglesMapBackToThePlacedPrimitives) {
 
 // Clipped placement keeps every cell exact placement keeps (the cells the triangle meets, widened by
 // the margin) and no cell outside the bounding box's: per cell, exact ⊆ clipped ⊆ bbox as sets, on
-// tilted thin blades (upright, whose lines of cells run along y, and lying along z), a soup of random
-// triangles, long needles and axis-aligned walls. The last soup's large triangles have more rows
-// than clipped placement records in its one clipping pass (32 per triangle plus one per cell,
-// grid_placement.cpp): its fill clips them again.
+// tilted thin blades (upright: few slabs along z, many rows along y; and lying along z: slabs along
+// y), a soup of random triangles, long needles and axis-aligned walls (edges parallel to the rows,
+// whose reciprocal slope overflows). The last soup's large triangles span more than 16 rows in a
+// slab (several passes of the scan conversion) and have more rows than clipped placement records
+// in its one clipping pass (32 per triangle plus one per cell, grid_placement.cpp): its fill clips
+// them again.
 TEST(GridBuild, ClippedCellsLieBetweenExactAndBbox) {
   for (const auto& [spec, density] : std::vector<std::pair<std::string, double>>{
            {"grass:blades=800,height=0.4,width=0.03", 4.0},

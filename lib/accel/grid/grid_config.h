@@ -12,10 +12,10 @@ namespace raylab {
 enum class GridPlacement {
   bbox,   ///< every cell the primitive's bounding box overlaps
   exact,  ///< only cells the primitive itself meets (CGAL's exact Triangle_3/Bbox_3 predicate)
-  /// Cells the triangle's part in each line of cells spans: the triangle clipped to each slab
-  /// of cells along one axis, then to each line along a second (Sutherland and Hodgman 1974), in
-  /// float, gives the range of its cells along the third, the axis its bounding box spans most
-  /// cells of. The cells the triangle meets, up to a slack of one placement margin (spheres: bbox).
+  /// Cells the triangle's part in each row of cells along x spans: the triangle clipped to each
+  /// slab of cells along y or z (Sutherland and Hodgman 1974), then that polygon scan-converted
+  /// into the rows of the slab, in float, gives the range of its cells along x in each row. The
+  /// cells the triangle meets, up to a slack of one placement margin (spheres: bbox).
   clipped,
 };
 

@@ -73,113 +73,155 @@ inline int clip_polygon(const Vec3f* in, int n, Vec3f* out, float bound) {
   return m;
 }
 
-/// Calls line(u, v, w_lo, w_hi) for the lines of cells along axis kW (cells u along kU, v along kV)
-/// of range `r` that a triangle's part in them reaches, with the range of cells along kW that part
-/// spans: the triangle clipped to each slab v along kV widened by 2·margin, then to each line u
-/// along kU widened by 2·margin, and the part's kU- and kW-extents widened by 2·margin. The extra
-/// margin covers the float rounding of the clipping (a few ulps of the coordinates, far below the
-/// margin), so the lines and ranges include every cell whose box widened by `margin` the triangle
-/// meets (and lie within the bounding box's). In exact arithmetic these are the cells whose box
-/// widened by 2·margin the triangle meets, whatever the axes (the triangle's part in a line is
-/// convex, so it spans whole ranges), which leaves the axes free: the fewer lines, the fewer clips.
-template <int kV, int kU, int kW, class Line>
-inline void for_each_clipped_line(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
-                                  Line&& line) {
+/// Vectors of N lanes in the GCC/Clang vector extensions (16 lanes: one AVX-512 register, or two
+/// AVX2, with -march=native), one strip of cells per lane; every operation is the IEEE operation
+/// of its scalar counterpart, lane by lane.
+template <int N>
+struct StripVectors;
+template <>
+struct StripVectors<8> {
+  using Floats = float __attribute__((vector_size(8 * sizeof(float))));
+  using Ints = std::int32_t __attribute__((vector_size(8 * sizeof(std::int32_t))));
+};
+template <>
+struct StripVectors<16> {
+  using Floats = float __attribute__((vector_size(16 * sizeof(float))));
+  using Ints = std::int32_t __attribute__((vector_size(16 * sizeof(std::int32_t))));
+};
+
+/// GridGeometry::cell_of, lane by lane (the same operations, so the same cells).
+template <class Floats, class Ints>
+inline Ints cells_of(const GridGeometry& g, int a, Floats x) {
+  Floats f = (x - g.box.lo[a]) * g.inv_cell[a];
+  const float last = static_cast<float>(g.res[a] - 1);
+  f = f < 0.0f ? Floats{} : f;
+  f = last < f ? Floats{} + last : f;
+  return __builtin_convertvector(f, Ints);
+}
+
+/// The x-ranges of cells of the rows first .. last (at most N, along kU) that the convex polygon
+/// slab[0, ns) reaches, row(u, i_lo, i_hi) for each (see for_each_clipped_row_across).
+template <int N, int kU, class Row>
+inline void scan_strips(const GridGeometry& g, const Vec3f* slab, int ns, const CellRange& r, float slack, int first,
+                        int last, Row&& row) {
+  using Floats = typename StripVectors<N>::Floats;
+  using Ints = typename StripVectors<N>::Ints;
+  constexpr int kW = 0;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  Ints lane{};
+  for (int s = 0; s < N; ++s) lane[s] = s;
+  // The strips' bounds, plane(kU, u) - slack and plane(kU, u + 1) + slack, lane by lane.
+  const Ints u = first + lane;
+  const Ints in_range = u <= last;
+  const Floats lo_plane = g.box.lo[kU] + __builtin_convertvector(u, Floats) * g.cell[kU];
+  Floats hi_plane = g.box.lo[kU] + __builtin_convertvector(u + 1, Floats) * g.cell[kU];
+  hi_plane = u + 1 == g.res[kU] ? Floats{} + g.box.hi[kU] : hi_plane;
+  const Floats strip_lo = lo_plane - slack, strip_hi = hi_plane + slack;
+  Floats wlo = Floats{} + kInf, whi = Floats{} - kInf;
+  for (int e = 0; e < ns; ++e) {
+    Vec3f p = slab[e], q = slab[e + 1 == ns ? 0 : e + 1];
+    if (q[kU] < p[kU]) std::swap(p, q);
+    const float pu = p[kU], qu = q[kU], pw = p[kW], qw = q[kW], dw = qw - pw, inv_du = 1.0f / (qu - pu);
+    const Ints meets = in_range & (pu <= strip_hi) & (qu >= strip_lo);
+    Floats at_lo, at_hi;
+    if (inv_du < kInf) [[likely]] {
+      Floats t_lo = (strip_lo - pu) * inv_du, t_hi = (strip_hi - pu) * inv_du;
+      t_lo = t_lo < 1.0f ? t_lo : Floats{} + 1.0f;
+      t_lo = t_lo > 0.0f ? t_lo : Floats{};
+      t_hi = t_hi < 1.0f ? t_hi : Floats{} + 1.0f;
+      t_hi = t_hi > 0.0f ? t_hi : Floats{};
+      at_lo = pw + dw * t_lo;
+      at_hi = pw + dw * t_hi;
+    } else {
+      at_lo = Floats{} + pw;
+      at_hi = Floats{} + qw;
+    }
+    const Floats low = at_lo < at_hi ? at_lo : at_hi, high = at_lo < at_hi ? at_hi : at_lo;
+    wlo = meets & (low < wlo) ? low : wlo;
+    whi = meets & (high > whi) ? high : whi;
+  }
+  const Ints w0 = cells_of<Floats, Ints>(g, kW, wlo - slack), w1 = cells_of<Floats, Ints>(g, kW, whi + slack);
+  const Ints found = (wlo <= whi) & (w0 <= r.hi[kW]) & (w1 >= r.lo[kW]);
+  for (int s = 0, strips = std::min(N, last - first + 1); s < strips; ++s)
+    if (found[s]) row(first + s, std::max(r.lo[kW], w0[s]), std::min(r.hi[kW], w1[s]));
+}
+
+/// Calls row(j, k, i_lo, i_hi) for the rows of cells along x (cells j along y, k along z) of range
+/// `r` that a triangle's part in them reaches, with the range of cells along x that part spans: the
+/// triangle clipped to each slab of cells along kV (y or z) widened by 2·margin (Sutherland and
+/// Hodgman 1974), then the x-extent of that polygon's part within the strip of each row along the
+/// other axis kU widened by 2·margin, widened by 2·margin. The part in a strip is not built: a
+/// convex polygon's extent in a strip is attained on its boundary there, so each edge pq (p_u <=
+/// q_u) that meets the strip [a, b] gives its points at parameters clamp((a - p_u)·(1 / (q_u -
+/// p_u)), 0, 1) and likewise at b, x = p_x + (q_x - p_x)·t: one pass over the polygon's edges
+/// scan-converts it into 8 or 16 strips at once (scan_strips). An edge whose reciprocal overflows (|q_u - p_u| <
+/// 2^-128, far below the margin) gives both its endpoints to every strip it meets. The clipping
+/// and the interpolation round by a few ulps of the coordinates, far below the extra margin, so
+/// the rows and ranges include every cell whose box widened by `margin` the triangle meets (and
+/// lie within the bounding box's). In exact arithmetic these are the cells whose box widened by
+/// 2·margin the triangle meets, whatever the axes (the triangle's part in a row is convex, so it
+/// spans whole ranges), which leaves kV free: the fewer slabs, the fewer clips. Rows come slab by
+/// slab, in increasing order along kU within a slab.
+template <int kV, int kU, class Row>
+inline void for_each_clipped_row_across(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
+                                        Row&& row) {
   const float slack = 2.0f * margin;
-  // A clip that keeps every vertex returns its input, so it is skipped when the polygon's extent
-  // along the axis says so: float subtraction is monotone, so the extent decides it exactly (the
-  // first slab's or line's lower plane and the last one's upper plane, mostly).
-  auto clip_to = [](auto axis, const Vec3f* in, int n, float lo, float hi, float below, float above, Vec3f* tmp,
-                    Vec3f* out, const Vec3f*& part) {
-    constexpr int a = decltype(axis)::value;
-    part = in;
-    if (!(lo - below >= 0.0f)) {
-      n = clip_polygon<a, true>(part, n, tmp, below);
-      part = tmp;
-    }
-    if (!(above - hi >= 0.0f)) {
-      n = clip_polygon<a, false>(part, n, out, above);
-      part = out;
-    }
-    return n;
-  };
   float vlo = tri[0][kV], vhi = tri[0][kV];
   for (int q = 1; q < 3; ++q) vlo = std::min(vlo, tri[q][kV]), vhi = std::max(vhi, tri[q][kV]);
-  Vec3f slab_tmp[8], slab_buf[8], line_tmp[8], line_buf[8];  // a slab's part may stay in slab_tmp
+  Vec3f slab_tmp[8], slab_buf[8];  // a slab's part may stay in slab_tmp
   for (int v = r.lo[kV]; v <= r.hi[kV]; ++v) {
+    // A clip that keeps every vertex returns its input, so it is skipped when the triangle's
+    // extent along kV says so: float subtraction is monotone, so the extent decides it exactly
+    // (the first slab's lower plane and the last one's upper plane).
     int ns = 3;
     const Vec3f* slab = tri;
     if (r.lo[kV] != r.hi[kV]) {
-      ns = clip_to(std::integral_constant<int, kV>{}, tri, 3, vlo, vhi, g.plane(kV, v) - slack,
-                   g.plane(kV, v + 1) + slack, slab_tmp, slab_buf, slab);
+      const float below = g.plane(kV, v) - slack, above = g.plane(kV, v + 1) + slack;
+      if (!(vlo - below >= 0.0f)) {
+        ns = clip_polygon<kV, true>(slab, ns, slab_tmp, below);
+        slab = slab_tmp;
+      }
+      if (!(above - vhi >= 0.0f)) {
+        ns = clip_polygon<kV, false>(slab, ns, slab_buf, above);
+        slab = slab_buf;
+      }
       if (ns == 0) continue;
     }
     float ulo = slab[0][kU], uhi = slab[0][kU];
     for (int q = 1; q < ns; ++q) ulo = std::min(ulo, slab[q][kU]), uhi = std::max(uhi, slab[q][kU]);
     const int u0 = std::max(r.lo[kU], g.cell_of(kU, ulo - slack)), u1 = std::min(r.hi[kU], g.cell_of(kU, uhi + slack));
-    for (int u = u0; u <= u1; ++u) {
-      const Vec3f* part = slab;
-      int nr = ns;
-      if (u0 != u1) {
-        nr = clip_to(std::integral_constant<int, kU>{}, slab, ns, ulo, uhi, g.plane(kU, u) - slack,
-                     g.plane(kU, u + 1) + slack, line_tmp, line_buf, part);
-        if (nr == 0) continue;
-      }
-      float wlo = part[0][kW], whi = part[0][kW];
-      for (int q = 1; q < nr; ++q) wlo = std::min(wlo, part[q][kW]), whi = std::max(whi, part[q][kW]);
-      const int w0 = std::max(r.lo[kW], g.cell_of(kW, wlo - slack)), w1 = std::min(r.hi[kW], g.cell_of(kW, whi + slack));
-      if (w0 <= w1) line(u, v, w0, w1);
-    }
+    auto slab_row = [&](int u, int i0, int i1) {
+      if constexpr (kV == 2)
+        row(u, v, i0, i1);
+      else
+        row(v, u, i0, i1);
+    };
+    if (u1 - u0 < 8)
+      scan_strips<8, kU>(g, slab, ns, r, slack, u0, u1, slab_row);
+    else
+      for (int first = u0; first <= u1; first += 16)
+        scan_strips<16, kU>(g, slab, ns, r, slack, first, u1, slab_row);
   }
 }
 
-/// Calls row(j, k, i_lo, i_hi) for the runs of cells along x, rows (j, k) in increasing order, of
-/// the cells for_each_clipped_line finds for a triangle with bounding-box cell range `r`. Lines
-/// run along the axis the range spans most cells of (the others are clipped to), so a tall blade
-/// of grass is clipped to its few columns instead of its many rows; lines not along x are
-/// gathered into one 64-bit mask of x-cells per row first. With at most one axis spanning
-/// several cells the cells are the range's (the triangle is connected), and nothing is clipped.
+/// Calls row(j, k, i_lo, i_hi) for the runs of cells along x of the cells of a triangle with
+/// bounding-box cell range `r`: for_each_clipped_row_across with slabs along the axis of y and z
+/// the range spans fewer cells of (a tall blade of grass is clipped to its few slabs along z, and
+/// its many rows along y are scan-converted). With at most one axis spanning several cells the
+/// cells are the range's (the triangle is connected), and nothing is clipped.
 template <class Row>
 inline void for_each_clipped_row(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
                                  Row&& row) {
   const int nx = r.hi[0] - r.lo[0] + 1, ny = r.hi[1] - r.lo[1] + 1, nz = r.hi[2] - r.lo[2] + 1;
-  constexpr int kMaxRows = 256;
   if ((nx > 1) + (ny > 1) + (nz > 1) <= 1) {
     for (int k = r.lo[2]; k <= r.hi[2]; ++k)
       for (int j = r.lo[1]; j <= r.hi[1]; ++j) row(j, k, r.lo[0], r.hi[0]);
     return;
   }
-  if ((nx >= ny && nx >= nz) || nx > 64 || std::int64_t(ny) * nz > kMaxRows)
-    return for_each_clipped_line<2, 1, 0>(g, tri, r, margin, row);
-  std::uint64_t mask[kMaxRows];
-  std::fill(mask, mask + ny * nz, std::uint64_t{0});
-  // The rows of slab k that hold cells: row_lo[k - lo] .. row_hi[k - lo] (a thin, tilted triangle
-  // reaches few of its bounding box's rows in each slab).
-  int row_lo[kMaxRows], row_hi[kMaxRows];
-  std::fill(row_lo, row_lo + nz, r.hi[1] + 1);
-  std::fill(row_hi, row_hi + nz, r.lo[1] - 1);
-  auto row_mask = [&](int j, int k) -> std::uint64_t& { return mask[(k - r.lo[2]) * ny + (j - r.lo[1])]; };
-  if (ny >= nz)
-    for_each_clipped_line<2, 0, 1>(g, tri, r, margin, [&](int i, int k, int j0, int j1) {
-      row_lo[k - r.lo[2]] = std::min(row_lo[k - r.lo[2]], j0);
-      row_hi[k - r.lo[2]] = std::max(row_hi[k - r.lo[2]], j1);
-      for (int j = j0; j <= j1; ++j) row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
-    });
+  if (nz <= ny)
+    for_each_clipped_row_across<2, 1>(g, tri, r, margin, row);
   else
-    for_each_clipped_line<1, 0, 2>(g, tri, r, margin, [&](int i, int j, int k0, int k1) {
-      for (int k = k0; k <= k1; ++k) {
-        row_lo[k - r.lo[2]] = std::min(row_lo[k - r.lo[2]], j);
-        row_hi[k - r.lo[2]] = std::max(row_hi[k - r.lo[2]], j);
-        row_mask(j, k) |= std::uint64_t{1} << (i - r.lo[0]);
-      }
-    });
-  for (int k = r.lo[2]; k <= r.hi[2]; ++k)
-    for (int j = row_lo[k - r.lo[2]]; j <= row_hi[k - r.lo[2]]; ++j)
-      for (std::uint64_t m = row_mask(j, k); m != 0;) {
-        const int first = std::countr_zero(m), count = std::countr_one(m >> first);
-        row(j, k, r.lo[0] + first, r.lo[0] + first + count - 1);
-        m &= count == 64 ? 0 : ~(((std::uint64_t{1} << count) - 1) << first);
-      }
+    for_each_clipped_row_across<1, 2>(g, tri, r, margin, row);
 }
 
 inline Bounds3f prim_bounds(const Scene& s, std::uint32_t prim) {
