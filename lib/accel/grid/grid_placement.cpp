@@ -121,17 +121,14 @@ inline void scan_strips(const GridGeometry& g, const Vec3f* slab, int ns, const 
   for (int e = 0; e < ns; ++e) {
     Vec3f p = slab[e], q = slab[e + 1 == ns ? 0 : e + 1];
     if (q[kU] < p[kU]) std::swap(p, q);
-    const float pu = p[kU], qu = q[kU], pw = p[kW], qw = q[kW], dw = qw - pw, inv_du = 1.0f / (qu - pu);
+    const float pu = p[kU], qu = q[kU], pw = p[kW], qw = q[kW], slope = (qw - pw) * (1.0f / (qu - pu));
     const Ints meets = in_range & (pu <= strip_hi) & (qu >= strip_lo);
     Floats at_lo, at_hi;
-    if (inv_du < kInf) [[likely]] {
-      Floats t_lo = (strip_lo - pu) * inv_du, t_hi = (strip_hi - pu) * inv_du;
-      t_lo = t_lo < 1.0f ? t_lo : Floats{} + 1.0f;
-      t_lo = t_lo > 0.0f ? t_lo : Floats{};
-      t_hi = t_hi < 1.0f ? t_hi : Floats{} + 1.0f;
-      t_hi = t_hi > 0.0f ? t_hi : Floats{};
-      at_lo = pw + dw * t_lo;
-      at_hi = pw + dw * t_hi;
+    if (std::abs(slope) <= std::numeric_limits<float>::max()) [[likely]] {
+      // the strip's bounds clamped into [p_u, q_u] where it meets the edge
+      const Floats u_lo = strip_lo > pu ? strip_lo : pu, u_hi = strip_hi < qu ? strip_hi : qu;
+      at_lo = pw + (u_lo - pu) * slope;
+      at_hi = pw + (u_hi - pu) * slope;
     } else {
       at_lo = Floats{} + pw;
       at_hi = Floats{} + qw;
@@ -151,17 +148,17 @@ inline void scan_strips(const GridGeometry& g, const Vec3f* slab, int ns, const 
 /// triangle clipped to each slab of cells along kV (y or z) widened by 2·margin (Sutherland and
 /// Hodgman 1974), then the x-extent of that polygon's part within the strip of each row along the
 /// other axis kU widened by 2·margin, widened by 2·margin. The part in a strip is not built: a
-/// convex polygon's extent in a strip is attained on its boundary there, so each edge pq (p_u <=
-/// q_u) that meets the strip [a, b] gives its points at parameters clamp((a - p_u)·(1 / (q_u -
-/// p_u)), 0, 1) and likewise at b, x = p_x + (q_x - p_x)·t: one pass over the polygon's edges
-/// scan-converts it into 8 or 16 strips at once (scan_strips). An edge whose reciprocal overflows (|q_u - p_u| <
-/// 2^-128, far below the margin) gives both its endpoints to every strip it meets. The clipping
-/// and the interpolation round by a few ulps of the coordinates, far below the extra margin, so
-/// the rows and ranges include every cell whose box widened by `margin` the triangle meets (and
-/// lie within the bounding box's). In exact arithmetic these are the cells whose box widened by
-/// 2·margin the triangle meets, whatever the axes (the triangle's part in a row is convex, so it
-/// spans whole ranges), which leaves kV free: the fewer slabs, the fewer clips. Rows come slab by
-/// slab, in increasing order along kU within a slab.
+/// convex polygon's extent in a strip [a, b] is attained on its boundary there, so each edge pq
+/// (p_u <= q_u) that meets the strip gives its points at u = max(a, p_u) and min(b, q_u), x = p_x
+/// + (u - p_u)·s with slope s = (q_x - p_x)·(1 / (q_u - p_u)): one pass over the polygon's edges
+/// scan-converts it into 8 or 16 strips at once (scan_strips). An edge whose slope overflows (q_u
+/// - p_u below |q_x - p_x|·2^-128, far below the margin) gives both its endpoints to every strip
+/// it meets. The clipping and the interpolation round by a few ulps of the coordinates, far below
+/// the extra margin, so the rows and ranges include every cell whose box widened by `margin` the
+/// triangle meets (and lie within the bounding box's). In exact arithmetic these are the cells
+/// whose box widened by 2·margin the triangle meets, whatever the axes (the triangle's part in a
+/// row is convex, so it spans whole ranges), which leaves kV free: the fewer slabs, the fewer
+/// clips. Rows come slab by slab, in increasing order along kU within a slab.
 template <int kV, int kU, class Row>
 inline void for_each_clipped_row_across(const GridGeometry& g, const Vec3f (&tri)[3], const CellRange& r, float margin,
                                         Row&& row) {
