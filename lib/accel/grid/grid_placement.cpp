@@ -106,7 +106,6 @@ inline void scan_strips(const GridGeometry& g, const Vec3f* slab, int ns, const 
                         int last, Row&& row) {
   using Floats = typename StripVectors<N>::Floats;
   using Ints = typename StripVectors<N>::Ints;
-  constexpr int kW = 0;
   constexpr float kInf = std::numeric_limits<float>::infinity();
   Ints lane{};
   for (int s = 0; s < N; ++s) lane[s] = s;
@@ -117,30 +116,30 @@ inline void scan_strips(const GridGeometry& g, const Vec3f* slab, int ns, const 
   Floats hi_plane = g.box.lo[kU] + __builtin_convertvector(u + 1, Floats) * g.cell[kU];
   hi_plane = u + 1 == g.res[kU] ? Floats{} + g.box.hi[kU] : hi_plane;
   const Floats strip_lo = lo_plane - slack, strip_hi = hi_plane + slack;
-  Floats wlo = Floats{} + kInf, whi = Floats{} - kInf;
+  Floats xlo = Floats{} + kInf, xhi = Floats{} - kInf;
   for (int e = 0; e < ns; ++e) {
     Vec3f p = slab[e], q = slab[e + 1 == ns ? 0 : e + 1];
     if (q[kU] < p[kU]) std::swap(p, q);
-    const float pu = p[kU], qu = q[kU], pw = p[kW], qw = q[kW], slope = (qw - pw) * (1.0f / (qu - pu));
+    const float pu = p[kU], qu = q[kU], px = p[0], qx = q[0], slope = (qx - px) * (1.0f / (qu - pu));
     const Ints meets = in_range & (pu <= strip_hi) & (qu >= strip_lo);
     Floats at_lo, at_hi;
     if (std::abs(slope) <= std::numeric_limits<float>::max()) [[likely]] {
       // the strip's bounds clamped into [p_u, q_u] where it meets the edge
       const Floats u_lo = strip_lo > pu ? strip_lo : pu, u_hi = strip_hi < qu ? strip_hi : qu;
-      at_lo = pw + (u_lo - pu) * slope;
-      at_hi = pw + (u_hi - pu) * slope;
+      at_lo = px + (u_lo - pu) * slope;
+      at_hi = px + (u_hi - pu) * slope;
     } else {
-      at_lo = Floats{} + pw;
-      at_hi = Floats{} + qw;
+      at_lo = Floats{} + px;
+      at_hi = Floats{} + qx;
     }
     const Floats low = at_lo < at_hi ? at_lo : at_hi, high = at_lo < at_hi ? at_hi : at_lo;
-    wlo = meets & (low < wlo) ? low : wlo;
-    whi = meets & (high > whi) ? high : whi;
+    xlo = meets & (low < xlo) ? low : xlo;
+    xhi = meets & (high > xhi) ? high : xhi;
   }
-  const Ints w0 = cells_of<Floats, Ints>(g, kW, wlo - slack), w1 = cells_of<Floats, Ints>(g, kW, whi + slack);
-  const Ints found = (wlo <= whi) & (w0 <= r.hi[kW]) & (w1 >= r.lo[kW]);
+  const Ints i0 = cells_of<Floats, Ints>(g, 0, xlo - slack), i1 = cells_of<Floats, Ints>(g, 0, xhi + slack);
+  const Ints found = (xlo <= xhi) & (i0 <= r.hi[0]) & (i1 >= r.lo[0]);
   for (int s = 0, strips = std::min(N, last - first + 1); s < strips; ++s)
-    if (found[s]) row(first + s, std::max(r.lo[kW], w0[s]), std::min(r.hi[kW], w1[s]));
+    if (found[s]) row(first + s, std::max(r.lo[0], i0[s]), std::min(r.hi[0], i1[s]));
 }
 
 /// Calls row(j, k, i_lo, i_hi) for the rows of cells along x (cells j along y, k along z) of range
