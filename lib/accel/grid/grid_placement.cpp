@@ -133,8 +133,8 @@ inline void scan_strips(const GridGeometry& g, const Vec3f* slab, int ns, const 
       at_hi = Floats{} + qx;
     }
     const Floats low = at_lo < at_hi ? at_lo : at_hi, high = at_lo < at_hi ? at_hi : at_lo;
-    xlo = meets & (low < xlo) ? low : xlo;
-    xhi = meets & (high > xhi) ? high : xhi;
+    xlo = (meets & (low < xlo)) ? low : xlo;
+    xhi = (meets & (high > xhi)) ? high : xhi;
   }
   const Ints i0 = cells_of<Floats, Ints>(g, 0, xlo - slack), i1 = cells_of<Floats, Ints>(g, 0, xhi + slack);
   const Ints found = (xlo <= xhi) & (i0 <= r.hi[0]) & (i1 >= r.lo[0]);
