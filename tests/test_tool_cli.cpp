@@ -126,6 +126,13 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(j["check_rule"], "tolerance");
   EXPECT_GT(j["mismatches_touching"].get<int>(), 0) << "the watertight kernel decides no touching ray wrong?";
   EXPECT_EQ(j["mismatches"], j["mismatches_touching"]);
+  // Every touching ray here is ill-conditioned: its bucket, where the watertight kernel claims nothing.
+  const auto& ill = j["mismatches_by_bucket"]["ill_conditioned"];
+  EXPECT_EQ(ill["rays"], 500);
+  EXPECT_EQ(ill["mismatches"], j["mismatches"]);
+  EXPECT_EQ(j["mismatches_by_bucket"]["crossing"]["rays"], 0);
+  EXPECT_EQ(j["within_stated_bound"], true);
+  EXPECT_FALSE(j.contains("bound_exceeded"));
   std::ifstream in(hits_path);
   std::string header, row;
   std::getline(in, header);
@@ -139,6 +146,7 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   const auto k = nlohmann::json::parse(c.out);
   EXPECT_EQ(k["check_rule"], "exact");
   EXPECT_EQ(k["mismatches"], 0);
+  EXPECT_EQ(k["within_stated_bound"], true);
   EXPECT_DOUBLE_EQ(k["exact_fallbacks_per_ray"].get<double>(), 1.0);
 
   // `raylab accels` states each bound per class, and the certified one beside the default.

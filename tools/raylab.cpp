@@ -300,6 +300,16 @@ int run_trace(const TraceCommand& o) {
         j[std::string("mismatches_") + contact_name(k)] = c.class_mismatches[static_cast<std::size_t>(k)];
       j["mismatches_ill_conditioned"] = c.ill_conditioned_mismatches;
     }
+    if (cls && o.check == "exact") {
+      // The accelerator's stated accuracy (`raylab accels`), judged per bucket as the oracle suite judges it.
+      nlohmann::json buckets;
+      for (int k = 0; k < kRayBuckets; ++k)
+        buckets[ray_bucket_name(static_cast<RayBucket>(k))] = {{"rays", c.bucket_rays[k]}, {"mismatches", c.bucket_mismatches[k]}};
+      j["mismatches_by_bucket"] = buckets;
+      std::string exceeded;
+      j["within_stated_bound"] = within_bound(accuracy_bound(o.accel), c, is_feature_ray_spec(o.rays), &exceeded);
+      if (!exceeded.empty()) j["bound_exceeded"] = exceeded;
+    }
     j["first_mismatch_rays"] = c.first_mismatches;
   }
   j["peak_rss_bytes"] = peak_rss_bytes();
