@@ -69,8 +69,7 @@ bool bsp_traverse(const BspTreeView& tree, const Ray& ray, Hit& hit, Counters& c
         // its rounding error; NaN (the ray lies in the plane) visits both sides over the whole
         // interval; d[a] = ±0 gives inv = +inf and t* = ±inf, which keeps the origin's side.
         const float t = (static_cast<float>(node->origin[a]) - ray.org[a]) * inv[a];
-        const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
-        const float t_lo = w0 < w1 ? w0 : w1, t_hi = w0 < w1 ? w1 : w0;
+        const auto [t_lo, t_hi] = widened_plane_t(t);
         const std::uint32_t near = inv[a] > 0.0f ? negative : positive, far = inv[a] > 0.0f ? positive : negative;
         if (t_lo > std::min(tmax, Kernel::closest(r.ctx))) {
           index = near;

@@ -19,6 +19,16 @@ namespace raylab {
 /// certified kernel's γ3 < 2^-21).
 inline constexpr float kPlaneSlack = 1e-6f;
 
+/// A plane's t widened by kPlaneSlack·|t| on each side: lo <= t <= hi for finite t, ±inf kept,
+/// and NaN (the ray lies in the plane) in both, which fails every comparison.
+struct WidenedPlaneT {
+  float lo, hi;
+};
+inline WidenedPlaneT widened_plane_t(float t) {
+  const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
+  return {w0 < w1 ? w0 : w1, w0 < w1 ? w1 : w0};
+}
+
 /// A direct-mapped mailbox of the last primitives a ray tested (Amanatides and Woo 1987): a
 /// primitive tested once need not be tested again, since the closest hit only moves closer.
 template <bool kEnabled>

@@ -62,10 +62,10 @@ struct KdPlaneCrossing {
 inline KdPlaneCrossing kd_cross(const KdNode& node, std::uint32_t index, const Ray& ray, const Vec3f& inv) {
   const int a = node.axis();
   const float t = (node.split - ray.org[a]) * inv[a];  // NaN: the ray lies in the plane
-  const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
+  const WidenedPlaneT w = widened_plane_t(t);
   const bool lower_first = inv[a] > 0.0f;  // inv = +inf for d = ±0: t* = ±inf keeps the origin's side
   const std::uint32_t lower = index + 1, upper = node.above_child();
-  return {w0 < w1 ? w0 : w1, w0 < w1 ? w1 : w0, lower_first ? lower : upper, lower_first ? upper : lower};
+  return {w.lo, w.hi, lower_first ? lower : upper, lower_first ? upper : lower};
 }
 
 /// Tests primitives prims[0, n) of `scene`, skipping those the mailbox has seen; true on a hit

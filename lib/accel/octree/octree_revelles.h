@@ -37,10 +37,10 @@
 
 namespace raylab {
 
-/// The parameter t widened by its rounding error, downward and upward.
-/// (t·(1 ∓ kPlaneSlack) keeps ±inf; t is never NaN here.)
-inline float oct_t_below(float t) { return std::min(t * (1.0f - kPlaneSlack), t * (1.0f + kPlaneSlack)); }
-inline float oct_t_above(float t) { return std::max(t * (1.0f - kPlaneSlack), t * (1.0f + kPlaneSlack)); }
+/// The parameter t widened by its rounding error, downward and upward (widened_plane_t; t is
+/// never NaN here).
+inline float oct_t_below(float t) { return widened_plane_t(t).lo; }
+inline float oct_t_above(float t) { return widened_plane_t(t).hi; }
 
 /// The mirrored-frame walk over the leaves a ray crosses, front to back.
 ///

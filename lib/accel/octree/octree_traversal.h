@@ -185,9 +185,9 @@ bool octree_traverse_stack(const OctreeView& tree, const Ray& ray, Hit& hit, Cou
         mid[a] = is_split ? octree_mid(box, a) : box.hi[a];
         const float t = is_split ? (mid[a] - ray.org[a]) * inv[a]  // NaN: the ray lies in the plane
                                  : (flip & (1u << a) ? -kInf : kInf);
-        const float w0 = t * (1.0f - kPlaneSlack), w1 = t * (1.0f + kPlaneSlack);
-        lo[a] = std::max(-kInf, w0 < w1 ? w0 : w1);  // NaN -> -inf
-        hi[a] = std::min(kInf, w0 < w1 ? w1 : w0);   // NaN -> +inf
+        const WidenedPlaneT w = widened_plane_t(t);
+        lo[a] = std::max(-kInf, w.lo);  // NaN -> -inf
+        hi[a] = std::min(kInf, w.hi);   // NaN -> +inf
         if (hi[a] < tmin) c0 |= 1u << a;
         else if (!(lo[a] > tcut)) crossed |= 1u << a;
       }
