@@ -281,7 +281,8 @@ int run_trace(const TraceCommand& o) {
                                        [&] { return trace_rays(*reference, rays, TraceOptions{o.threads, false, any_hit}); },
                                        &check_s);
     // Methods stated exact (the exact and certified kernels) are checked by the exact rule.
-    const bool exact_rule = o.check == "exact" && accuracy_bound(o.accel).exact;
+    const AccuracyBound bound = accuracy_bound(o.accel);
+    const bool exact_rule = o.check == "exact" && bound.exact;
     const std::vector<RayContact>* cls = classes.empty() ? nullptr : &classes;
     const HitComparison c = any_hit      ? compare_occlusion(timed.blocked, ref.blocked, cls)
                             : exact_rule ? compare_hits_exact(*scene, rays, timed.hits, ref.hits, cls)
@@ -307,7 +308,7 @@ int run_trace(const TraceCommand& o) {
         buckets[ray_bucket_name(static_cast<RayBucket>(k))] = {{"rays", c.bucket_rays[k]}, {"mismatches", c.bucket_mismatches[k]}};
       j["mismatches_by_bucket"] = buckets;
       std::string exceeded;
-      j["within_stated_bound"] = within_bound(accuracy_bound(o.accel), c, is_feature_ray_spec(o.rays), &exceeded);
+      j["within_stated_bound"] = within_bound(bound, c, is_feature_ray_spec(o.rays), &exceeded);
       if (!exceeded.empty()) j["bound_exceeded"] = exceeded;
     }
     j["first_mismatch_rays"] = c.first_mismatches;
