@@ -1,8 +1,9 @@
 #pragma once
 // Small glTF 2.0 files written by the tests themselves (Khronos glTF 2.0 specification): meshes
-// of float VEC3 positions and uint32 indices in one buffer, nodes with a matrix or TRS and
-// children, one scene of root nodes. The buffer is embedded as a base64 data URI, written beside
-// the file as a .bin, or carried in a binary glTF (.glb) container.
+// of float VEC3 positions and uint32 indices in one buffer (triangles, and primitives of lines or
+// points beside them), nodes with a matrix or TRS and children, one scene of root nodes. The
+// buffer is embedded as a base64 data URI, written beside the file as a .bin, or carried in a
+// binary glTF (.glb) container.
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -41,10 +42,23 @@ inline GltfNode trs_node(int mesh, std::array<double, 3> t, std::array<double, 4
   return n;
 }
 
+/// glTF primitive modes other than TRIANGLES (glTF 2.0 §3.7.2.1, mesh.primitive.mode).
+enum class GltfMode { points = 0, lines = 1, line_loop = 2, line_strip = 3 };
+
+/// A primitive of mode `mode` in mesh `mesh`, beside that mesh's triangles: its own positions
+/// and, unless empty, uint32 indices into them.
+struct GltfPrimitive {
+  int mesh = 0;
+  GltfMode mode = GltfMode::lines;
+  std::vector<Vec3f> positions;
+  std::vector<std::uint32_t> indices;
+};
+
 struct GltfDocument {
-  std::vector<TriangleMesh> meshes;
+  std::vector<TriangleMesh> meshes;  ///< a mesh without triangles has only its `primitives`
   std::vector<GltfNode> nodes;
   std::vector<int> roots;
+  std::vector<GltfPrimitive> primitives;  ///< line and point primitives, after their mesh's triangles
 };
 
 enum class GltfBuffer { embedded, external, binary };
@@ -76,15 +90,34 @@ inline nlohmann::json gltf_json(const GltfDocument& doc, std::string& bin) {
     views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}});
     return views.size() - 1;
   };
-  for (const TriangleMesh& m : doc.meshes) {
-    Bounds3f b = m.bounds();
-    const std::size_t pv = add(m.vertices.data(), m.vertices.size() * sizeof(Vec3f));
-    accessors.push_back({{"bufferView", pv}, {"componentType", 5126}, {"count", m.vertices.size()}, {"type", "VEC3"},
+  auto add_positions = [&](const std::vector<Vec3f>& positions) {
+    Bounds3f b;
+    for (const Vec3f& p : positions) b.extend(p);
+    const std::size_t pv = add(positions.data(), positions.size() * sizeof(Vec3f));
+    accessors.push_back({{"bufferView", pv}, {"componentType", 5126}, {"count", positions.size()}, {"type", "VEC3"},
                          {"min", {b.lo.x, b.lo.y, b.lo.z}}, {"max", {b.hi.x, b.hi.y, b.hi.z}}});
-    const std::size_t position = accessors.size() - 1;
-    const std::size_t iv = add(m.triangles.data(), m.triangles.size() * 3 * sizeof(std::uint32_t));
-    accessors.push_back({{"bufferView", iv}, {"componentType", 5125}, {"count", 3 * m.triangles.size()}, {"type", "SCALAR"}});
-    meshes.push_back({{"primitives", {{{"attributes", {{"POSITION", position}}}, {"indices", accessors.size() - 1}}}}});
+    return accessors.size() - 1;
+  };
+  auto add_indices = [&](const void* indices, std::size_t count) {  // count uint32 indices
+    const std::size_t iv = add(indices, count * sizeof(std::uint32_t));
+    accessors.push_back({{"bufferView", iv}, {"componentType", 5125}, {"count", count}, {"type", "SCALAR"}});
+    return accessors.size() - 1;
+  };
+  for (std::size_t i = 0; i < doc.meshes.size(); ++i) {
+    const TriangleMesh& m = doc.meshes[i];
+    json primitives = json::array();
+    if (!m.triangles.empty()) {
+      const std::size_t position = add_positions(m.vertices);
+      const std::size_t indices = add_indices(m.triangles.data(), 3 * m.triangles.size());
+      primitives.push_back({{"attributes", {{"POSITION", position}}}, {"indices", indices}});
+    }
+    for (const GltfPrimitive& p : doc.primitives) {
+      if (p.mesh != static_cast<int>(i)) continue;
+      json primitive = {{"attributes", {{"POSITION", add_positions(p.positions)}}}, {"mode", static_cast<int>(p.mode)}};
+      if (!p.indices.empty()) primitive["indices"] = add_indices(p.indices.data(), p.indices.size());
+      primitives.push_back(primitive);
+    }
+    meshes.push_back({{"primitives", primitives}});
   }
   json nodes = json::array();
   for (const GltfNode& n : doc.nodes) {

@@ -3,12 +3,15 @@
 // instance transforms and 0 mismatches against the exact oracle (which flattens everything) for
 // several accelerators; and glTF faults rejected with one line.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <numbers>
 
@@ -275,6 +278,134 @@ TEST(SceneImport, ColladaGeometryUnderThreeNodes) {
   expect_agreement_with_oracle(scene);
 }
 
+/// A cube's triangles beside a LINES, a LINE_STRIP, a LINE_LOOP and two POINTS primitives (with
+/// and without indices), and a second mesh of lines only, placed by a node of its own: in all,
+/// 3 + 4 + 3 + 2 = 12 line segments and 7 + 2 = 9 points, all of them away from the cube.
+GltfDocument cube_lines_and_points() {
+  GltfDocument doc;
+  doc.meshes = {test::unit_cube(), TriangleMesh{}};
+  const std::vector<Vec3f> far = {{5, 0, 0}, {6, 0, 0}, {6, 1, 0}, {5, 1, 0}, {5, 1, 1}, {6, 1, 1}, {6, 2, 2}};
+  doc.primitives = {{0, test::GltfMode::lines, far, {0, 1, 1, 2, 2, 3}},
+                    {0, test::GltfMode::line_strip, {far.begin(), far.begin() + 5}, {}},
+                    {0, test::GltfMode::line_loop, {far.begin(), far.begin() + 3}, {}},
+                    {0, test::GltfMode::points, far, {}},
+                    {0, test::GltfMode::points, far, {4, 6}},
+                    {1, test::GltfMode::lines, {far.begin(), far.begin() + 4}, {}}};
+  doc.nodes = {test::trs_node(0, {0, 0, 0}), test::trs_node(1, {0, -9, 0})};
+  doc.roots = {0, 1};
+  return doc;
+}
+
+/// `raylab ARGS`: exit status, stdout and stderr.
+struct ToolRun {
+  int status = -1;
+  std::string out, err;
+};
+
+ToolRun run_tool(const ImportDir& dir, const std::string& args) {
+  const std::string out = dir / "tool.out", err = dir / "tool.err";
+  const int raw = std::system((std::string(RAYLAB_TOOL_PATH) + " " + args + " >" + out + " 2>" + err + " </dev/null").c_str());
+  auto slurp = [](const std::string& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(out), slurp(err)};
+}
+
+// Only faces of three or more indices are triangles (issue 29): lines and points are left out of
+// the scene, counted apart in the load report and in describe(), and no triangle comes from them.
+TEST(SceneImport, LinesAndPointsAreLeftOutAndCountedApart) {
+  ImportDir dir;
+  const GltfDocument doc = cube_lines_and_points();
+  for (const GltfBuffer buffer : {GltfBuffer::embedded, GltfBuffer::binary}) {
+    const std::string path = dir / (buffer == GltfBuffer::binary ? "lines.glb" : "lines.gltf");
+    test::write_gltf(path, doc, buffer);
+    SCOPED_TRACE(path);
+    SceneImportReport report;
+    const Scene s = import_scene(path, &report);
+    EXPECT_EQ(report.lines, 12u);
+    EXPECT_EQ(report.points, 9u);
+    EXPECT_EQ(report.meshes, 1u) << "the mesh of lines only is no scene mesh";
+    ASSERT_EQ(s.mesh.size(), 12u);
+    EXPECT_TRUE(s.bases.empty());
+    EXPECT_EQ(s.mesh.vertices.size(), 8u) << "no vertex of a line or point joins the triangles";
+    EXPECT_EQ(s.bounds().lo, Vec3f(0, 0, 0));
+    EXPECT_EQ(s.bounds().hi, Vec3f(1, 1, 1));
+    const SceneInfo info = describe(s);
+    EXPECT_EQ(info.triangles, 12u);
+    EXPECT_EQ(info.unique_triangles, 12u);
+    EXPECT_EQ(info.degenerate_triangles, 0u);
+    EXPECT_EQ(info.lines, 12u);
+    EXPECT_EQ(info.points, 9u);
+    EXPECT_TRUE(info.closed);
+  }
+}
+
+// A triangle with a repeated corner stays a (degenerate) triangle: it is no line. (The `assimp
+// info` tool reports such triangles as lines: its aiProcess_FindDegenerates turns them into
+// faces of two indices; raylab runs no such step.)
+TEST(SceneImport, TriangleWithARepeatedCornerIsADegenerateTriangleNotALine) {
+  ImportDir dir;
+  GltfDocument doc;
+  doc.meshes = {test::unit_cube()};
+  doc.meshes[0].triangles.push_back({0, 0, 7});
+  doc.nodes = {test::trs_node(0, {0, 0, 0})};
+  doc.roots = {0};
+  const std::string path = dir / "repeated_corner.gltf";
+  test::write_gltf(path, doc);
+  SceneImportReport report;
+  const Scene s = import_scene(path, &report);
+  EXPECT_EQ(s.mesh.size(), 13u);
+  EXPECT_EQ(report.lines, 0u);
+  const SceneInfo info = describe(s);
+  EXPECT_EQ(info.triangles, 13u);
+  EXPECT_EQ(info.degenerate_triangles, 1u);
+  EXPECT_EQ(info.lines, 0u);
+}
+
+// The same for OBJ (read by OpenMesh, mesh_io.h): `l` polylines and `p` points are counted, not
+// triangles; an OBJ of lines only is one error.
+TEST(SceneImport, ObjLinesAndPointsAreLeftOut) {
+  ImportDir dir;
+  const std::string vertices = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 5 5 5\nv 6 5 5\n";
+  std::ofstream(dir / "tet.obj") << vertices << "f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\nl 5 6\nl 1 5 6 2\np 5 6\n";
+  const auto scene = make_scene(dir / "tet.obj");
+  EXPECT_EQ(scene->mesh.size(), 4u);
+  const SceneInfo info = describe(*scene);
+  EXPECT_EQ(info.lines, 4u);
+  EXPECT_EQ(info.points, 2u);
+  EXPECT_TRUE(info.closed);
+  std::ofstream(dir / "lines.obj") << vertices << "l 1 2 3\n";
+  try {
+    make_scene(dir / "lines.obj");
+    ADD_FAILURE() << "an OBJ of lines only was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), dir / "lines.obj" + ": no triangles (2 lines, 0 points left out)");
+  }
+}
+
+// `raylab info` prints the left-out counts beside the triangle counts (text and JSON), and the
+// load warns about them on one line.
+TEST(SceneImport, InfoPrintsLinesAndPointsLeftOut) {
+  ImportDir dir;
+  const std::string path = dir / "lines.gltf";
+  test::write_gltf(path, cube_lines_and_points());
+  const ToolRun text = run_tool(dir, "info " + path);
+  ASSERT_EQ(text.status, 0) << text.err;
+  for (const char* line : {"\ntriangles: 12\n", "\nunique_triangles: 12\n", "\nlines: 12\n", "\npoints: 9\n"})
+    EXPECT_NE(text.out.find(line), std::string::npos) << line << " in\n" << text.out;
+  EXPECT_EQ(text.err, "raylab: warning: " + path + ": left out 12 lines and 9 points (raylab traces triangles)\n");
+  const ToolRun json = run_tool(dir, "info --json " + path);
+  ASSERT_EQ(json.status, 0) << json.err;
+  const auto j = nlohmann::json::parse(json.out);
+  EXPECT_EQ(j["triangles"], 12);
+  EXPECT_EQ(j["lines"], 12);
+  EXPECT_EQ(j["points"], 9);
+  const ToolRun plain = run_tool(dir, "info --json sphere:n=300");
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_EQ(nlohmann::json::parse(plain.out)["lines"], 0);
+}
+
 std::string import_error(const std::string& path) {
   try {
     import_scene(path);
@@ -298,6 +429,20 @@ TEST(SceneImportBadInput, FaultsAreNamedOnOneLine) {
     EXPECT_EQ(msg.find('\n'), std::string::npos);
   }
   EXPECT_EQ(import_scene(dir / "whole.glb").instances.size(), 2u);
+}
+
+// A scene of lines and points only: one error line with their counts, exit status 2.
+TEST(SceneImportBadInput, OnlyLinesAndPointsIsOneError) {
+  ImportDir dir;
+  GltfDocument doc = cube_lines_and_points();
+  doc.meshes[0] = TriangleMesh{};
+  const std::string path = dir / "only_lines.glb";
+  test::write_gltf(path, doc, GltfBuffer::binary);
+  EXPECT_EQ(import_error(path), path + ": no triangles (12 lines, 9 points left out)");
+  const ToolRun r = run_tool(dir, "info " + path);
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err, "raylab: error: " + path + ": no triangles (12 lines, 9 points left out)\n");
+  EXPECT_EQ(r.out, "");
 }
 
 TEST(SceneImportBadInput, OpenMeshFormatsAreNotAssimps) {

@@ -171,6 +171,8 @@ int run_info(const InfoOptions& o) {
   j["primitives"] = static_cast<std::uint64_t>(info.primitives);
   j["spheres"] = info.spheres;
   j["degenerate_triangles"] = info.degenerate_triangles;
+  j["lines"] = info.lines;    // of the source file, left out of the triangles above
+  j["points"] = info.points;
   j["closed"] = info.closed;
   j["bounds_min"] = {info.bounds.lo.x, info.bounds.lo.y, info.bounds.lo.z};
   j["bounds_max"] = {info.bounds.hi.x, info.bounds.hi.y, info.bounds.hi.z};
@@ -381,7 +383,7 @@ int main(int argc, char** argv) {
 
   InfoOptions info;
   auto* info_cmd = app.add_subcommand(
-      "info", "print meshes, instances, triangles (over all instances and unique), bounds, degenerate count and closedness of a scene");
+      "info", "print meshes, instances, triangles (over all instances and unique), bounds, degenerate count and closedness of a scene, and the lines and points its file holds (left out)");
   info_cmd->add_option("scene", info.scene, "scene spec")->required();
   info_cmd->add_flag("--json", info.json, "print one JSON object");
 

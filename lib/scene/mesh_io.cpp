@@ -173,6 +173,7 @@ class TokenReader {
 
 struct ScanResult {
   std::size_t faces = 0, triangles = 0, polygons = 0;
+  std::size_t lines = 0, points = 0;  ///< OBJ `l` segments and `p` points, left out
   bool binary = false;  ///< a binary STL (OpenMesh's stream reader must be told)
 };
 
@@ -254,6 +255,7 @@ ScanResult scan_off(const std::string& path, std::string_view text, std::string&
 
 // ---------------------------------------------------------------------------------------------
 // OBJ (Wavefront): v / vt / vn / f lines; 1-based indices, negative ones relative to the end.
+// `l` polylines (k vertices: k-1 segments) and `p` points are counted and left out.
 
 ScanResult scan_obj(const std::string& path, std::string_view text) {
   LineReader lines(text, true);
@@ -283,6 +285,10 @@ ScanResult scan_obj(const std::string& path, std::string_view text) {
         if (!finite_float(d)) fail_at(path, lines.line(), "vertex " + std::to_string(nv) + " has a non-finite coordinate");
       }
       if (static_cast<std::uint64_t>(++nv) > kMaxVertices) fail_at(path, lines.line(), "more than 2^32-1 vertices");
+    } else if (key == "l") {
+      r.lines += tok.size() > 2 ? tok.size() - 2 : 0;
+    } else if (key == "p") {
+      r.points += tok.size() - 1;
     } else if (key == "vt") {
       ++nvt;
     } else if (key == "vn") {
@@ -658,7 +664,14 @@ TriangleMesh load_mesh(const std::string& path, MeshLoadReport* report) {
     case FileFormat::stl: scan = scan_stl(path, text); break;
     default: break;
   }
+  if (scan.triangles == 0 && scan.lines + scan.points > 0)
+    fail(path, "no triangles (" + std::to_string(scan.lines) + " lines, " + std::to_string(scan.points) + " points left out)");
   if (scan.triangles == 0) fail(path, "no triangles");
+  local.lines = scan.lines;
+  local.points = scan.points;
+  if (scan.lines + scan.points > 0)
+    local.warnings.push_back(path + ": left out " + std::to_string(scan.lines) + " lines and " + std::to_string(scan.points) +
+                             " points (raylab traces triangles)");
   if (!canonical.empty()) std::string().swap(text);
 
   silence_openmesh();

@@ -26,6 +26,7 @@ struct MeshLoadReport {
   std::size_t polygons_triangulated = 0;  ///< faces with more than three corners, fanned into triangles
   std::size_t zero_area_triangles = 0;    ///< triangles of the result with zero area, decided exactly
   std::size_t faces_skipped = 0;          ///< faces OpenMesh rejects: a corner repeated, or STL corners merged
+  std::size_t lines = 0, points = 0;      ///< OBJ `l` segments and `p` points, left out (raylab traces triangles)
   std::vector<std::string> warnings;      ///< what was read anyway (also printed by warn_input), e.g. unknown PLY header lines
 };
 

@@ -108,6 +108,8 @@ SceneInfo describe(const Scene& scene) {
   }
   info.meshes += scene.bases.size();
   info.instances = scene.instances.size();
+  info.lines = scene.left_out_lines;
+  info.points = scene.left_out_points;
   if (scene.primitive_count() == 0 && scene.bases.empty()) info.closed = false;
   info.primitives = scene.total_primitive_count();
   info.bounds = scene.bounds();

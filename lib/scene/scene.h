@@ -35,6 +35,9 @@ struct Scene {
   /// How many meshes of the source were merged into `mesh` and `spheres` (`raylab info`'s
   /// meshes: counts them when the flat geometry is not empty).
   std::size_t flat_mesh_count = 1;
+  /// Line segments and points of the source file, left out of the scene (raylab traces
+  /// triangles and spheres only; scene_import.h, mesh_io.h): counted, never stored.
+  std::size_t left_out_lines = 0, left_out_points = 0;
 
   /// Base scenes (flat geometry only, non-empty), each placed by one or more instances.
   std::vector<std::shared_ptr<const Scene>> bases;
@@ -74,6 +77,7 @@ struct SceneInfo {
   std::size_t unique_triangles = 0;      ///< stored: flat geometry plus each base once
   std::size_t spheres = 0, instances = 0;
   std::size_t degenerate_triangles = 0;  ///< zero-area, decided exactly, over all instances
+  std::size_t lines = 0, points = 0;     ///< of the source file, left out of the triangles (Scene::left_out_lines, left_out_points)
   bool closed = false;  ///< every part (flat geometry, each base): every edge shared by exactly two triangles, consistently oriented
   Bounds3f bounds;
 };

@@ -147,10 +147,12 @@ void require_placeable(const std::string& path, const aiNode* node, const Affine
   if (!is_invertible(world)) fail(path, node_name(node) + " has a singular transform");
 }
 
-/// One aiMesh, validated: its triangle count after fanning polygons, and faces skipped.
+/// One aiMesh, validated: its triangle count after fanning polygons, and the lines and points
+/// left out.
 struct MeshCounts {
   std::uint64_t triangles = 0;
-  std::uint64_t skipped = 0;
+  std::uint64_t lines = 0;
+  std::uint64_t points = 0;
 };
 
 MeshCounts validate_mesh(const std::string& path, const aiScene& scene, unsigned index) {
@@ -172,8 +174,10 @@ MeshCounts validate_mesh(const std::string& path, const aiScene& scene, unsigned
       if (face.mIndices[k] >= m->mNumVertices)
         fail(path, where + ": face " + std::to_string(f) + ": vertex index " + std::to_string(face.mIndices[k]) + " is outside [0, " +
                        std::to_string(m->mNumVertices) + ")");
+    if (face.mNumIndices == 0) fail(path, where + ": face " + std::to_string(f) + " has no vertex index");
     if (face.mNumIndices >= 3) counts.triangles += face.mNumIndices - 2;
-    else ++counts.skipped;
+    else if (face.mNumIndices == 2) ++counts.lines;
+    else ++counts.points;
     if (counts.triangles > kMaxImportTriangles) fail(path, where + " has more than " + std::to_string(kMaxImportTriangles) + " triangles");
   }
   return counts;
@@ -292,12 +296,17 @@ Scene build_scene(const std::string& path, const aiScene& ai, SceneImportReport&
     if (uses[l] > 1) instances += uses[l];
     ++report.meshes;
   }
-  for (unsigned m = 0; m < ai.mNumMeshes; ++m) report.faces_skipped += validated[m] ? counts[m].skipped : 0;
+  for (unsigned m = 0; m < ai.mNumMeshes; ++m) {
+    if (!validated[m]) continue;
+    report.lines += counts[m].lines;
+    report.points += counts[m].points;
+  }
   if (stored > kMaxImportTriangles)
     fail(path, "the scene stores " + std::to_string(stored) + " triangles, more than " + std::to_string(kMaxImportTriangles));
   if (instances > kMaxImportInstances)
     fail(path, "the scene has " + std::to_string(instances) + " instances, more than " + std::to_string(kMaxImportInstances));
-  if (stored == 0) fail(path, "no triangles");
+  if (stored == 0)
+    fail(path, "no triangles (" + std::to_string(report.lines) + " lines, " + std::to_string(report.points) + " points left out)");
 
   Scene scene;
   std::vector<std::uint32_t> base_of(mesh_lists.size(), std::numeric_limits<std::uint32_t>::max());
@@ -318,6 +327,8 @@ Scene build_scene(const std::string& path, const aiScene& ai, SceneImportReport&
     scene.instances.push_back({p.world, base_of[p.mesh]});
   }
   scene.flat_mesh_count = report.flattened_meshes;
+  scene.left_out_lines = report.lines;
+  scene.left_out_points = report.points;
   report.instances = scene.instances.size();
   return scene;
 }
@@ -368,8 +379,9 @@ Scene import_scene(const std::string& path, SceneImportReport* report) {
   if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail(path, "no triangles (Assimp read an incomplete scene: no meshes)");
   SceneImportReport local;
   Scene scene = build_scene(path, *ai, local);
-  if (local.faces_skipped > 0)
-    warn_input(path + ": skipped " + std::to_string(local.faces_skipped) + " points and lines (raylab traces triangles)");
+  if (local.lines > 0 || local.points > 0)
+    warn_input(path + ": left out " + std::to_string(local.lines) + " lines and " + std::to_string(local.points) +
+               " points (raylab traces triangles)");
   if (report) *report = local;
   return scene;
 }

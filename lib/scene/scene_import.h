@@ -9,7 +9,14 @@
 ///   depth-first node order, bases in order of first use;
 /// - a mesh listed by one node only is transformed into world space (in double, rounded to
 ///   float) and joins the flat geometry.
-/// Polygons are fanned into triangles (v0, vi, vi+1); points and lines are skipped and counted.
+/// Polygons are fanned into triangles (v0, vi, vi+1). Only faces of three or more indices are
+/// triangles: Assimp gives a glTF LINES / LINE_STRIP / LINE_LOOP primitive's segments as faces of
+/// two indices and a POINTS primitive's points as faces of one (with or without
+/// aiProcess_Triangulate, which keeps them; aiProcess_SortByPType would only move them into meshes
+/// of their own). Those are left out of the scene and counted apart (SceneImportReport,
+/// Scene::left_out_lines / left_out_points), once per mesh the node tree uses, like unique
+/// triangles. Degenerate triangles stay triangles: raylab runs no aiProcess_FindDegenerates, which
+/// would turn a triangle with a repeated corner into a line (as the `assimp info` tool reports it).
 ///
 /// Before Assimp sees a file: a size cap (kMaxSceneFileBytes, for every file it opens, buffers
 /// included), the format's magic (binary glTF header, FBX header, COLLADA root element, 3DS main
@@ -40,12 +47,15 @@ struct SceneImportReport {
   std::size_t meshes = 0;            ///< distinct node mesh lists with triangles (scene meshes)
   std::size_t flattened_meshes = 0;  ///< of those, used by one node and merged into the flat geometry
   std::size_t instances = 0;         ///< placements of the others
-  std::size_t faces_skipped = 0;     ///< points and lines
+  std::size_t lines = 0;             ///< line segments left out (faces of two indices)
+  std::size_t points = 0;            ///< points left out (faces of one index)
 };
 
 /// Reads the scene file at `path` (format by extension, or by content without one:
 /// file_format.h) through Assimp. Throws InputError for a format Assimp does not read here
-/// (OFF/OBJ/PLY/STL are mesh_io.h's), any fault listed above, and a scene without triangles.
+/// (OFF/OBJ/PLY/STL are mesh_io.h's), any fault listed above, and a scene without triangles
+/// (`FILE: no triangles (N lines, M points left out)`). Left-out lines and points are also
+/// printed as one warning (input_warning.h).
 Scene import_scene(const std::string& path, SceneImportReport* report = nullptr);
 
 }  // namespace raylab

@@ -48,7 +48,10 @@ std::string single_argument(const SpecString& spec, const std::string& what) {
 
 std::shared_ptr<Scene> mesh_scene(const std::string& path) {
   auto s = std::make_shared<Scene>();
-  s->mesh = load_mesh(path);
+  MeshLoadReport report;
+  s->mesh = load_mesh(path, &report);
+  s->left_out_lines = report.lines;
+  s->left_out_points = report.points;
   return s;
 }
 
