@@ -20,6 +20,7 @@
 #include "geometry/input_error.h"
 #include "rays/ray_file.h"
 #include "scene/mesh_io.h"
+#include "scene/procedural.h"
 #include "scene/scene_spec.h"
 
 namespace fs = std::filesystem;
@@ -215,6 +216,12 @@ const std::vector<std::string> kBadSpecs = {
     "instances:of=(soup:n=10),count=99999999999",
     "instances:of=(soup:n=0),count=2",
     "subdivided:of=(sphere:n=8),levels=99",
+    "subdivided:of=(sphere:n=8),levels=-1",
+    "subdivided:of=cgal:bunny00,levels=12",
+    "soup:n=-3",
+    "grass:blades=-4",
+    "instances:of=(soup:n=10),count=-2",
+    "decimated:of=(sphere:n=100),faces=-5",
     "subdivided:of=(sphereflake:depth=1),levels=1",
     "decimated:of=(sphere:n=100),faces=0",
     "file:/no/such/file.off",
@@ -259,4 +266,51 @@ TEST(BadInputTool, SceneSpecsThroughTheTool) {
     const ToolRun r = run_tool("info " + shell_quote(spec));
     expect_one_error_line(r, spec, spec.substr(0, std::min<std::size_t>(spec.size(), 6)));
   }
+}
+
+/// Loop subdivision past the limit (issue 29): the triangle count is estimated (x4 per level)
+/// and refused on one line naming the count and the limit, before anything is allocated (the
+/// tool runs under the 1 GiB address-space cap; the result would need about 10^14 bytes).
+TEST(BadInput, SubdivisionPastTheLimitIsRefusedBeforeAllocating) {
+  const std::size_t bunny = make_scene("cgal:bunny00")->mesh.size();
+  const std::string spec = "subdivided:of=cgal:bunny00,levels=12";
+  const std::string msg = error_of([&] { make_scene(spec); });
+  EXPECT_NE(msg.find(std::to_string(bunny) + " triangles would make " + std::to_string(std::uint64_t{bunny} << 24)), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("more than the limit of " + std::to_string(subdivision_triangle_limit()) + " triangles"), std::string::npos) << msg;
+  EXPECT_LE(subdivision_triangle_limit(), std::uint64_t{1} << 27);
+  EXPECT_GT(subdivision_triangle_limit(), std::uint64_t{1} << 20);
+  const long limit = kAddressSanitizer ? 0 : 1L << 20;  // KiB: 1 GiB
+  const ToolRun r = run_tool("info " + spec, limit);
+  expect_one_error_line(r, spec, "more than the limit of");
+  EXPECT_LT(r.seconds, 20.0);
+  // Within the limit it subdivides: 8·4^2 triangles.
+  EXPECT_EQ(make_scene("subdivided:of=(soup:n=8),levels=2")->mesh.size(), 128u);
+}
+
+/// A negative count, wherever a count is given (scene and ray specs, --threads, --width,
+/// --passes, sweep shards, merge shards), is refused on one line naming it.
+TEST(BadInputTool, NegativeCountsGiveOneErrorLine) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"trace --scene soup:n=-3", "n=-3"},
+      {"trace --scene sphere:n=64 --rays diffuse:-5", "-5"},
+      {"trace --scene sphere:n=64 --rays shadow:-1", "-1"},
+      {"trace --scene sphere:n=64 --threads -1", "--threads -1"},
+      {"render --scene sphere:n=64 --out /tmp/raylab_negative_threads.png --threads -1", "--threads -1"},
+      {"render --scene sphere:n=64 --out /tmp/raylab_negative_width.png --width -5", "--width"},
+      {"sweep --plan quick --check --threads -1", "--threads -1"},
+      {"sweep --plan quick --check --passes -1", "--passes -1"},
+      {"sweep --plan quick --check --shard -1/2", "-1/2"},
+      {"sweep --plan quick --check --shard 1/-2", "1/-2"},
+      {"merge --plan quick --shards -1 --out /tmp/raylab_negative_merge.csv /tmp/raylab_negative_shard.csv", "--shards"},
+      {"predict --scene sphere:n=64 --accel bvh --threads -1", "--threads -1"},
+  };
+  fs::remove("/tmp/raylab_negative_threads.png");
+  fs::remove("/tmp/raylab_negative_merge.csv");
+  for (const auto& [args, name] : cases) {
+    const ToolRun r = run_tool(args);
+    expect_one_error_line(r, args, name);
+  }
+  EXPECT_FALSE(fs::exists("/tmp/raylab_negative_threads.png"));
+  EXPECT_FALSE(fs::exists("/tmp/raylab_negative_merge.csv"));
 }

@@ -341,6 +341,7 @@ struct RenderCommand {
 int run_render(const RenderCommand& o) {
   if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
     throw InputError("--width/--height must be in [1, 16384]");
+  if (o.threads < 0 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 0..1024");
   if (o.out.size() < 5 || o.out.substr(o.out.size() - 4) != ".png") throw InputError("--out " + o.out + ": expected a .png path");
   if (o.log_scale && !o.heatmap) throw InputError("--log: a log colour scale needs --heatmap");
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });

@@ -4,7 +4,10 @@
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <string>
@@ -424,10 +427,30 @@ std::vector<Ray> near_miss_row_rays(const NearMissRowConfig& c, std::size_t n, s
   return rays;
 }
 
+std::uint64_t subdivision_triangle_limit() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page_bytes = sysconf(_SC_PAGE_SIZE);
+  const std::uint64_t cap = static_cast<std::uint64_t>(kMaxTriangles);
+  if (pages <= 0 || page_bytes <= 0) return cap;
+  const double held = static_cast<double>(pages) * static_cast<double>(page_bytes) / kSubdivisionBytesPerTriangle;
+  return held < static_cast<double>(cap) ? static_cast<std::uint64_t>(held) : cap;
+}
+
 Scene make_subdivided(const Scene& of, int levels) {
   require_plain_triangles(of, "subdivided");
-  require(levels >= 0 && levels <= 10, "subdivided: levels must be in [0, 10]");
-  check_triangle_budget("subdivided", static_cast<double>(of.mesh.size()) * std::pow(4.0, levels));
+  require(levels >= 0 && levels <= kMaxSubdivisionLevels,
+          "subdivided: levels must be in [0, " + std::to_string(kMaxSubdivisionLevels) + "]");
+  const double triangles = static_cast<double>(of.mesh.size()) * std::pow(4.0, levels);
+  const std::uint64_t limit = subdivision_triangle_limit();
+  if (triangles > static_cast<double>(limit)) {
+    const long pages = sysconf(_SC_PHYS_PAGES), page_bytes = sysconf(_SC_PAGE_SIZE);
+    char memory[160] = "";
+    if (pages > 0 && page_bytes > 0)
+      std::snprintf(memory, sizeof memory, ", and what %.1f GiB of physical memory holds at about %.0f bytes per triangle",
+                    static_cast<double>(pages) * static_cast<double>(page_bytes) / (1u << 30), kSubdivisionBytesPerTriangle);
+    throw InputError("subdivided: " + std::to_string(levels) + " levels of " + std::to_string(of.mesh.size()) + " triangles would make " +
+                     std::to_string(static_cast<std::uint64_t>(triangles)) + " (x4 per level), more than the limit of " +
+                     std::to_string(limit) + " triangles (the least of 2^27" + memory + ")");
+  }
   Scene s;
   if (levels == 0) {
     s.mesh = of.mesh;

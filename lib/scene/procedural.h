@@ -166,9 +166,23 @@ std::vector<Ray> near_miss_row_rays(const NearMissRowConfig& c, std::size_t n, s
 
 /// `subdivided:of=SPEC,levels=K` — Loop subdivision (Loop, "Smooth Subdivision Surfaces Based
 /// on Triangles", MSc thesis, Utah 1987) of a triangle scene via OpenMesh's LoopT; each level
-/// multiplies the triangle count by 4. levels in [0, 10], default 1; refused when the result
-/// would exceed 2^27 triangles or the scene has spheres or instances.
+/// multiplies the triangle count by 4. levels in [0, kMaxSubdivisionLevels], default 1; refused,
+/// before anything is allocated, when the result (T·4^levels triangles) would exceed
+/// subdivision_triangle_limit(), and when the scene has spheres or instances.
 Scene make_subdivided(const Scene& of, int levels);
+
+/// 4^14 > 2^27: past 13 levels not even one triangle stays within the limit.
+inline constexpr int kMaxSubdivisionLevels = 13;
+
+/// Peak memory of make_subdivided per output triangle, an upper estimate (OpenMesh's halfedge
+/// mesh with LoopT's properties, then the TriangleMesh): the peak RSS of `raylab info` on
+/// subdivided:of=cgal:bunny00 was 83 bytes per triangle at levels=3 (4.8 M triangles) and 80 at
+/// levels=4 (19.3 M), rounded up.
+inline constexpr double kSubdivisionBytesPerTriangle = 96;
+
+/// The most triangles make_subdivided makes: 2^27, and no more than the machine's physical
+/// memory (sysconf _SC_PHYS_PAGES; ignored when unknown) holds at kSubdivisionBytesPerTriangle.
+std::uint64_t subdivision_triangle_limit();
 
 /// `decimated:of=SPEC,faces=N` — quadric-error edge-collapse decimation (Garland & Heckbert,
 /// "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997) via OpenMesh's

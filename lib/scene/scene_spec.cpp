@@ -194,7 +194,7 @@ std::shared_ptr<Scene> build(const std::string& text) {
     *scene = make_near_miss_row(c);
   } else if (name == "subdivided") {
     const std::string of = r.get_string("of", "cgal:bunny00");
-    const int levels = static_cast<int>(r.get_int("levels", 1, 0, 10));
+    const int levels = static_cast<int>(r.get_int("levels", 1, 0, kMaxSubdivisionLevels));
     r.finish(params);
     *scene = make_subdivided(*make_scene(of), levels);
   } else if (name == "decimated") {
@@ -328,7 +328,7 @@ const std::vector<SceneKindDoc>& scene_kinds() {
         {"gap", "0.001", "distance of every triangle from the axis, in (0, radius/4]"},
         {"radius", "0.25", "size of each triangle"}}},
       {"subdivided", "Loop subdivision (OpenMesh) of a triangle scene",
-       {{"of", "cgal:bunny00", "the scene to subdivide"}, {"levels", "1", "levels (x4 triangles each), in [0, 10]"}}},
+       {{"of", "cgal:bunny00", "the scene to subdivide"}, {"levels", "1", "levels (x4 triangles each), in [0, 13]; refused past 2^27 triangles or what physical memory holds"}}},
       {"decimated", "quadric decimation (OpenMesh) of a triangle scene",
        {{"of", "cgal:bunny00", "the scene to decimate"}, {"faces", "1000", "target triangle count, in [1, 2^27]"}}},
       {"transformed", "a scene under a similarity: rotated, scaled and moved (far from the origin, or tiny)",
