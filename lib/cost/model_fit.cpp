@@ -109,8 +109,8 @@ double range_feature(const std::string& name, const RunRecord& run) {
 
 std::string FeatureRangeCheck::describe() const {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "%s %.3g is %.2gx %s the fitted %.6g..%.6g", feature.c_str(), value, factor,
-                above() ? "above" : "below", lo, hi);
+  std::snprintf(buf, sizeof buf, "%s %.3g is %.*fx %s the fitted %.6g..%.6g", feature.c_str(), value, factor < 10 ? 1 : 0,
+                factor, above() ? "above" : "below", lo, hi);
   return buf;
 }
 
