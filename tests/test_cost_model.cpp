@@ -485,6 +485,10 @@ TEST(CostIntervals, NinetyPercentIntervalsCoverFreshPointsAndWidenOutsideTheRang
   far.primitives = 250;
   EXPECT_DOUBLE_EQ(kd.check_range(far).worst.factor, 4.0);
   EXPECT_FALSE(kd.check_range(far).worst.above());
+  EXPECT_DOUBLE_EQ(kd.check_range(far).widening(), 3.0);
+  EXPECT_DOUBLE_EQ(check_feature_range("primitives", 5.0, {10.0, 20.0}).factor, 2.0);
+  EXPECT_DOUBLE_EQ(check_feature_range("primitives", 15.0, {10.0, 20.0}).factor, 1.0);
+  EXPECT_DOUBLE_EQ(range_widening(0.5), 1.0);
 }
 
 TEST(CostIntervals, ConstantsCovarianceWidensPredictionsAwayFromTheData) {

@@ -114,20 +114,27 @@ std::string FeatureRangeCheck::describe() const {
   return buf;
 }
 
-double RangeCheck::widening() const { return extrapolated() ? 1.0 + std::log2(worst.factor) : 1.0; }
+double range_widening(double factor) { return factor > 1.0 ? 1.0 + std::log2(factor) : 1.0; }
+
+double RangeCheck::widening() const { return range_widening(worst.factor); }
+
+FeatureRangeCheck check_feature_range(const std::string& feature, double value, const FittedRange& range) {
+  FeatureRangeCheck c;
+  c.feature = feature;
+  c.value = value;
+  c.lo = range.lo;
+  c.hi = range.hi;
+  if (c.value > c.hi) c.factor = c.hi > 0 ? c.value / c.hi : std::numeric_limits<double>::infinity();
+  else if (c.value < c.lo) c.factor = c.value > 0 ? c.lo / c.value : std::numeric_limits<double>::infinity();
+  return c;
+}
 
 RangeCheck FamilyModel::check_range(const RunRecord& run) const {
   RangeCheck check;
   for (const std::string& feature : kRangeFeatures) {
     const auto it = ranges.find(feature);
     if (it == ranges.end()) continue;
-    FeatureRangeCheck c;
-    c.feature = feature;
-    c.value = range_feature(feature, run);
-    c.lo = it->second.lo;
-    c.hi = it->second.hi;
-    if (c.value > c.hi) c.factor = c.hi > 0 ? c.value / c.hi : std::numeric_limits<double>::infinity();
-    else if (c.value < c.lo) c.factor = c.value > 0 ? c.lo / c.value : std::numeric_limits<double>::infinity();
+    const FeatureRangeCheck c = check_feature_range(feature, range_feature(feature, run), it->second);
     if (!c.outside()) continue;
     check.outside.push_back(c);
     if (c.factor > check.worst.factor) check.worst = c;

@@ -74,6 +74,13 @@ struct FeatureRangeCheck {
   std::string describe() const;
 };
 
+/// `value` of `feature` against `range` (the factor rule of the header comment); for any model
+/// with a fitted range (the build-time model's primitives too).
+FeatureRangeCheck check_feature_range(const std::string& feature, double value, const FittedRange& range);
+
+/// w = 1 + log2(factor) for factor > 1, else 1: the interval widening outside a fitted range.
+double range_widening(double factor);
+
 /// A run against the fitted range of every feature of kRangeFeatures that the model has.
 struct RangeCheck {
   FeatureRangeCheck worst;                ///< the largest factor (factor 1 and no feature when inside)
