@@ -9,10 +9,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <thread>
 
@@ -62,6 +65,9 @@ std::size_t data_rows(const fs::path& csv) {
 
 const char* kSmallPlan = R"({"scenes": ["sphere:n=400", "walls:n=10,angle=30"],
   "accels": ["bvh", "bvh:width=2", "kdtree", "grid", "octree"], "rays": ["primary:4096", "diffuse:4096"]})";
+
+/// raylab predict --strict's factor (model_fit.h: kStrictRangeFactor).
+constexpr double kStrictFactorForTests = 2.0;
 
 void expect_one_error_line(const ToolRun& r, const std::string& what) {
   EXPECT_EQ(r.status, 2) << what << "\n" << r.err;
@@ -180,10 +186,104 @@ TEST(CostCli, PredictMeasuresACaseAsTheSweepDoesAndFitPrintsItsConstants) {
   EXPECT_DOUBLE_EQ(j.at("tests_per_ray").get<double>(), row->tests_per_ray);
   EXPECT_GE(j.at("passes").get<int>(), 5);
   EXPECT_GE(row->passes, 5);
-  // Far outside the data (a hundred times the primitives) it refuses unless told otherwise.
-  const std::string big = "predict --model " + model.string() + " --scene sphere:n=100000 --accel kdtree";
-  expect_one_error_line(run_tool(big), big);
+  // The fit printed the held-out coverage of its intervals. This plan gives each family 4 rows, no
+  // more than the tree model's terms: no residual spread, so no tree interval (null), but the counters one.
+  EXPECT_NE(fit.out.find("90% intervals cover"), std::string::npos) << fit.out;
+  EXPECT_NE(fit.out.find("replicate error: n/a"), std::string::npos) << fit.out;
+  EXPECT_TRUE(j.contains("interval90_ns_per_ray")) << p.out;
+  EXPECT_TRUE(j.at("interval90_from_counters_ns_per_ray").is_array()) << p.out;
+  EXPECT_FALSE(j.at("extrapolated").get<bool>());
+  EXPECT_TRUE(p.err.empty()) << p.err;
+
+  // A model whose rows bracket the case (jittered copies of its row over six made-up scenes, times
+  // from known constants with 5% log-normal noise): the prediction carries a 90% interval.
+  const fs::path bracket = scratch_dir() / "bracket_runs.csv", bracket_model = scratch_dir() / "bracket_model.json";
+  {
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> jitter(0.5, 2.0);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    std::ofstream out(bracket, std::ios::trunc);
+    out << raylab::runs_csv_header() << "\n";
+    for (int s = 0; s < 6; ++s)
+      for (int i = 0; i < 8; ++i) {
+        raylab::RunRecord r = *row;
+        r.case_number = s * 8 + i;
+        r.scene = "made-up-" + std::to_string(s);
+        r.rays = "diffuse:" + std::to_string(1000 + i);
+        if (s + i > 0) {  // the first row is the case itself
+          r.primitives = static_cast<std::int64_t>(static_cast<double>(r.primitives) * jitter(rng));
+          r.e_inner *= jitter(rng);
+          r.e_leaves *= jitter(rng);
+          r.e_tests *= jitter(rng);
+          r.e_test_groups = r.e_tests / 4;
+        }
+        r.ns_per_ray_min = (10 + 2 * r.e_inner + 1.5 * r.e_tests) * std::exp(noise(rng));
+        out << raylab::to_csv_row(r) << "\n";
+        if (s < 2) {  // the cases of two scenes measured again, 25% slower: a replicate error of 0.25/1.125
+          r.case_number += 1000;
+          r.ns_per_ray_min *= 1.25;
+          out << raylab::to_csv_row(r) << "\n";
+        }
+      }
+  }
+  const ToolRun bracket_fit = run_tool("fit --runs " + bracket.string() + " --out " + bracket_model.string());
+  ASSERT_EQ(bracket_fit.status, 0) << bracket_fit.err;
+  // A model error this far below the machine's (made-up) repeatability gets the verdict.
+  EXPECT_NE(bracket_fit.out.find("replicate error 22.2% over 16 replicated cases; counters held-out MAPE"), std::string::npos)
+      << bracket_fit.out;
+  EXPECT_NE(bracket_fit.out.find("within 1.5x the replicate error: as good as this machine can tell"), std::string::npos)
+      << bracket_fit.out;
+  const ToolRun inside = run_tool("predict --model " + bracket_model.string() +
+                                  " --scene sphere:n=400 --accel kdtree --rays diffuse:4096 --json");
+  ASSERT_EQ(inside.status, 0) << inside.err;
+  EXPECT_TRUE(inside.err.empty()) << inside.err;
+  const auto ij = nlohmann::json::parse(inside.out);
+  EXPECT_FALSE(ij.at("extrapolated").get<bool>());
+  const auto interval = ij.at("interval90_ns_per_ray");
+  ASSERT_TRUE(interval.is_array()) << inside.out;
+  EXPECT_LT(interval[0].get<double>(), ij.at("predicted_ns_per_ray").get<double>());
+  EXPECT_GT(interval[1].get<double>(), ij.at("predicted_ns_per_ray").get<double>());
+
+  // Far outside the data (hundreds of times the primitives) it predicts, warns once naming the
+  // feature and the factor, and widens the interval; --strict refuses; --allow-extrapolation is
+  // still accepted.
+  const std::string big = "predict --model " + bracket_model.string() + " --scene sphere:n=100000 --accel kdtree --rays diffuse:4096";
+  const ToolRun far = run_tool(big + " --json");
+  ASSERT_EQ(far.status, 0) << far.err;
+  EXPECT_EQ(far.err.rfind("raylab: warning: kdtree is outside the model's data: primitives ", 0), 0u) << far.err;
+  EXPECT_NE(far.err.find("x above the fitted"), std::string::npos) << far.err;
+  EXPECT_NE(far.err.find("; the interval is widened"), std::string::npos) << far.err;
+  EXPECT_EQ(std::count(far.err.begin(), far.err.end(), '\n'), 1) << far.err;
+  const auto fj = nlohmann::json::parse(far.out);
+  EXPECT_TRUE(fj.at("extrapolated").get<bool>());
+  EXPECT_GT(fj.at("extrapolation_factor").get<double>(), kStrictFactorForTests);
+  const auto wide = fj.at("interval90_ns_per_ray");
+  ASSERT_TRUE(wide.is_array()) << far.out;
+  EXPECT_GT(std::log(wide[1].get<double>() / wide[0].get<double>()),
+            2 * std::log(interval[1].get<double>() / interval[0].get<double>()));
+  expect_one_error_line(run_tool(big + " --strict"), big + " --strict");
   EXPECT_EQ(run_tool(big + " --allow-extrapolation").status, 0);
+
+  // Every case measured twice (the copy 2% slower): the fit reports a replicate error of 2/101.
+  const fs::path replicated = scratch_dir() / "replicated_runs.csv", model2 = scratch_dir() / "replicated_model.json";
+  {
+    std::ofstream out(replicated, std::ios::trunc);
+    out << raylab::runs_csv_header() << "\n";
+    for (raylab::RunRecord r : rows) {
+      out << raylab::to_csv_row(r) << "\n";
+      r.ns_per_ray_min *= 1.02;
+      out << raylab::to_csv_row(r) << "\n";
+    }
+  }
+  const ToolRun refit = run_tool("fit --runs " + replicated.string() + " --out " + model2.string() + " --json");
+  ASSERT_EQ(refit.status, 0) << refit.err;
+  const auto rj = nlohmann::json::parse(refit.out);
+  EXPECT_NEAR(rj.at("families").at("kdtree").at("replicate_error").get<double>(), 0.02 / 1.01, 1e-9) << refit.out;
+  EXPECT_EQ(rj.at("families").at("kdtree").at("replicate_groups").get<int>(), 4);  // 2 scenes x 2 ray sets
+  EXPECT_TRUE(rj.at("families").at("kdtree").at("tree").at("held_out_coverage90").is_number()) << refit.out;
+  const ToolRun refit_text = run_tool("fit --runs " + replicated.string() + " --out " + model2.string());
+  ASSERT_EQ(refit_text.status, 0) << refit_text.err;
+  EXPECT_NE(refit_text.out.find("replicate error 2.0% over 4 replicated cases"), std::string::npos) << refit_text.out;
 }
 
 TEST(CostCli, MergeNamesTheShardsLackingCasesAndWritesNothing) {

@@ -386,11 +386,189 @@ TEST(CostModelFile, RoundTripsAndRejectsOtherVersionsAndMissingFamilies) {
     std::ofstream(p, std::ios::trunc) << t;
     return p;
   };
-  EXPECT_THROW(read_model_file(variant("\"version\": 1", "\"version\": 2")), InputError);
+  EXPECT_THROW(read_model_file(variant("\"version\": 2", "\"version\": 3")), InputError);
+  EXPECT_THROW(read_model_file(variant("\"covariance\": [", "\"covariance\": [[1], ")), InputError);
+  EXPECT_THROW(read_model_file(variant("\"replicate_error\"", "\"replicate_err\"")), InputError);
   EXPECT_THROW(read_model_file(variant("raylab-cost-model", "something-else")), InputError);
   EXPECT_THROW(read_model_file(variant("\"families\": {", "\"families\": {,")), InputError);
   EXPECT_THROW(read_model_file(variant("\"c_trav\"", "\"c_travel\"")), InputError);
   EXPECT_THROW(read_model_file("/no/such/model.json"), InputError);
+}
+
+/// Runs of one family over `scenes` scenes made by ns = 20 + 1.5·nodes + 3·tests (counters) =
+/// 20 + 5·e_inner + 7.5·e_tests (tree), times exp(N(0, σ²)): log-normal noise of known spread.
+/// Scene s has 1000·(s + 1) primitives. With `replicates`, every case is measured twice (two rows,
+/// one key, independent noise).
+std::vector<RunRecord> log_normal_runs(double sigma, std::uint32_t seed, int scenes, int per_scene, bool replicates = false) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> nodes(5, 60), tests(2, 40);
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::vector<RunRecord> runs;
+  for (int s = 0; s < scenes; ++s)
+    for (int i = 0; i < per_scene; ++i) {
+      RunRecord r;
+      r.scene = "scene" + std::to_string(s);
+      r.scene_family = s % 2 ? "odd" : "even";
+      r.accel = "kdtree";
+      r.family = "kdtree";
+      r.rays = "primary:" + std::to_string(100 + i);
+      r.ray_kind = "primary";
+      r.query = "intersect";
+      r.primitives = 1000 * (s + 1);
+      r.nodes_per_ray = nodes(rng);
+      r.tests_per_ray = tests(rng);
+      r.e_inner = 0.3 * r.nodes_per_ray;
+      r.e_tests = 0.4 * r.tests_per_ray;
+      const double ns = 20 + 1.5 * r.nodes_per_ray + 3 * r.tests_per_ray;
+      for (int k = 0; k < (replicates ? 2 : 1); ++k) {
+        r.case_number = static_cast<std::int64_t>(runs.size());
+        r.ns_per_ray_min = ns * std::exp(noise(rng));
+        runs.push_back(r);
+      }
+    }
+  return runs;
+}
+
+TEST(CostIntervals, NinetyPercentIntervalsCoverFreshPointsAndWidenOutsideTheRange) {
+  const double sigma = 0.05;
+  const CostModelSet set = fit_cost_model_set(log_normal_runs(sigma, 21, 8, 15), {}, FitTarget::minimum);
+  const FamilyModel& kd = set.family("kdtree");
+  for (const LevelFit* f : {&kd.counters, &kd.tree}) {
+    ASSERT_TRUE(f->cross_validated);
+    EXPECT_EQ(f->model.covariance.size(), f->model.terms.size() * f->model.terms.size());
+    // The held-out spread estimates the noise that made the data, and the held-out intervals cover about 90%.
+    EXPECT_GT(f->model.residual_log_sigma, 0.8 * sigma) << level_name(f->model.level);
+    EXPECT_LT(f->model.residual_log_sigma, 1.3 * sigma) << level_name(f->model.level);
+    EXPECT_GE(f->held_out_coverage90, 0.8) << level_name(f->model.level);
+    EXPECT_LE(f->held_out_coverage90, 0.98) << level_name(f->model.level);
+  }
+  EXPECT_TRUE(std::isnan(kd.replicate_error));
+  EXPECT_EQ(kd.replicate_groups, 0u);
+
+  // Fresh points of the same process, inside the fitted range.
+  const std::vector<RunRecord> fresh = log_normal_runs(sigma, 22, 8, 100);
+  for (ModelLevel level : {ModelLevel::counters, ModelLevel::tree}) {
+    std::size_t inside = 0;
+    for (const RunRecord& r : fresh) {
+      const IntervalPrediction p = kd.level_fit(level).model.predict_interval(r);
+      ASSERT_LT(p.lo, p.ns);
+      ASSERT_GT(p.hi, p.ns);
+      inside += p.lo <= r.ns_per_ray_min && r.ns_per_ray_min <= p.hi;
+    }
+    const double coverage = static_cast<double>(inside) / static_cast<double>(fresh.size());
+    EXPECT_GE(coverage, 0.8) << level_name(level);
+    EXPECT_LE(coverage, 0.97) << level_name(level);
+  }
+
+  // Ten times the largest scene's primitives: flagged, named, and its interval 1 + log2(10) times as wide in log space.
+  RunRecord far = fresh.front();
+  far.primitives = 4000;
+  far.nodes_per_ray = 30;
+  far.tests_per_ray = 20;
+  far.e_inner = 9;
+  far.e_tests = 8;
+  const FamilyPrediction near = kd.predict(ModelLevel::tree, far);
+  ASSERT_FALSE(near.range.extrapolated()) << near.range.worst.describe();
+  EXPECT_DOUBLE_EQ(near.range.widening(), 1.0);
+  far.primitives = 80000;
+  const FamilyPrediction outside = kd.predict(ModelLevel::tree, far);
+  ASSERT_TRUE(outside.range.extrapolated());
+  EXPECT_EQ(outside.range.worst.feature, "primitives");
+  EXPECT_TRUE(outside.range.worst.above());
+  EXPECT_DOUBLE_EQ(outside.range.worst.factor, 10.0);
+  EXPECT_EQ(outside.range.worst.describe(), "primitives 8e+04 is 10x above the fitted 1000..8000");
+  EXPECT_DOUBLE_EQ(outside.interval.ns, near.interval.ns);
+  EXPECT_NEAR(std::log(outside.interval.hi / outside.interval.ns), (1 + std::log2(10.0)) * std::log(near.interval.hi / near.interval.ns),
+              1e-9);
+  EXPECT_LT(outside.interval.lo, near.interval.lo);
+  // Below the range too.
+  far.primitives = 250;
+  EXPECT_DOUBLE_EQ(kd.check_range(far).worst.factor, 4.0);
+  EXPECT_FALSE(kd.check_range(far).worst.above());
+  EXPECT_DOUBLE_EQ(kd.check_range(far).widening(), 3.0);
+  EXPECT_DOUBLE_EQ(check_feature_range("primitives", 5.0, {10.0, 20.0}).factor, 2.0);
+  EXPECT_DOUBLE_EQ(check_feature_range("primitives", 15.0, {10.0, 20.0}).factor, 1.0);
+  EXPECT_DOUBLE_EQ(range_widening(0.5), 1.0);
+}
+
+TEST(CostIntervals, ConstantsCovarianceWidensPredictionsAwayFromTheData) {
+  // Few rows: the constants' uncertainty is a visible part of the interval, and grows with the features.
+  const std::vector<RunRecord> runs = log_normal_runs(0.05, 5, 1, 12);
+  FitResult details;
+  FittedCostModel m = fit_cost_model(ModelLevel::counters, {"c0", "node", "test"}, runs, {}, &details);
+  ASSERT_EQ(m.covariance.size(), 9u);
+  for (std::size_t j = 0; j < 3; ++j) EXPECT_NEAR(std::sqrt(m.covariance[j * 3 + j]), m.std_errors[j], 1e-9 * m.std_errors[j]);
+  EXPECT_NEAR(m.covariance[1], m.covariance[3], 1e-12 * std::abs(m.covariance[1]) + 1e-300);  // symmetric
+  RunRecord typical = runs.front(), far = runs.front();
+  typical.nodes_per_ray = 30;
+  typical.tests_per_ray = 20;
+  far.nodes_per_ray = 600;
+  far.tests_per_ray = 20;
+  EXPECT_GT(m.parameter_log_variance(far), m.parameter_log_variance(typical));
+  m.residual_log_sigma = 0.05;
+  const IntervalPrediction a = m.predict_interval(typical), b = m.predict_interval(typical, 0.2);
+  EXPECT_GT(a.log_sigma, 0.05);                       // the covariance adds to the residual spread
+  EXPECT_GT(b.log_sigma, 0.2);                        // the replicate spread is a floor
+  EXPECT_LT(b.log_sigma, std::hypot(0.2, 0.05));      // and not added to the residual spread
+  const IntervalPrediction none = log_normal_interval90(-1.0, 0.1);
+  EXPECT_TRUE(std::isnan(none.lo) && std::isnan(none.hi));
+}
+
+TEST(CostReplicates, ReplicateErrorIsTheMeanPairwiseSpreadOfCasesMeasuredAgain) {
+  auto row = [](const std::string& scene, const std::string& accel, std::int64_t threads, double ns) {
+    RunRecord r;
+    r.scene = scene;
+    r.accel = accel;
+    r.rays = "primary:64";
+    r.threads = threads;
+    r.ns_per_ray_min = ns;
+    return r;
+  };
+  // (a, bvh): 100 and 110; (b, bvh): 50, 50 and 60 (pairs 0, 10/55, 10/55); singletons and another
+  // thread count are not replicates.
+  const ReplicateError e = replicate_error({row("a", "bvh", 1, 100), row("b", "bvh", 1, 50), row("a", "bvh", 1, 110),
+                                            row("b", "bvh", 1, 50), row("b", "bvh", 1, 60), row("a", "kdtree", 1, 70),
+                                            row("a", "bvh", 2, 300)});
+  EXPECT_EQ(e.groups, 2u);
+  EXPECT_NEAR(e.mape, 0.5 * (10.0 / 105.0 + (2.0 / 3.0) * (10.0 / 55.0)), 1e-12);
+  EXPECT_TRUE(std::isnan(replicate_error({row("a", "bvh", 1, 100), row("b", "bvh", 1, 100)}).mape));
+
+  // Log-normal noise of spread σ: the replicate error is 2σ/√π, and the fit recovers σ from it.
+  const double sigma = 0.05;
+  const std::vector<RunRecord> runs = log_normal_runs(sigma, 31, 8, 100, true);
+  const CostModelSet set = fit_cost_model_set(runs, {}, FitTarget::minimum);
+  const FamilyModel& kd = set.family("kdtree");
+  EXPECT_EQ(kd.replicate_groups, 800u);
+  EXPECT_NEAR(kd.replicate_error, 2 * sigma / std::sqrt(std::acos(-1.0)), 0.1 * sigma);
+  EXPECT_NEAR(replicate_log_sigma(kd.replicate_error), sigma, 0.1 * sigma);
+  // Replicates share their scene: eight scenes, and both rows of a pair are held out together (the
+  // same fold's model predicts both identically).
+  EXPECT_EQ(kd.scenes.size(), 8u);
+  const std::vector<double>& held_out = kd.counters.held_out_predictions;
+  ASSERT_EQ(held_out.size(), runs.size());
+  for (std::size_t i = 0; i + 1 < runs.size(); i += 2) ASSERT_DOUBLE_EQ(held_out[i], held_out[i + 1]) << i;
+
+  // The file keeps what the intervals need.
+  const std::string path = scratch("replicates.json").string();
+  write_model_file(set, path);
+  const FamilyModel back = read_model_file(path).family("kdtree");
+  EXPECT_DOUBLE_EQ(back.replicate_error, kd.replicate_error);
+  EXPECT_EQ(back.replicate_groups, kd.replicate_groups);
+  EXPECT_DOUBLE_EQ(back.tree.held_out_coverage90, kd.tree.held_out_coverage90);
+  EXPECT_DOUBLE_EQ(back.tree.model.residual_log_sigma, kd.tree.model.residual_log_sigma);
+  EXPECT_EQ(back.tree.model.covariance, kd.tree.model.covariance);
+  const RunRecord probe = runs.front();
+  EXPECT_DOUBLE_EQ(back.predict(ModelLevel::tree, probe).interval.hi, kd.predict(ModelLevel::tree, probe).interval.hi);
+}
+
+TEST(CostModelFile, TheCommittedModelLoadsWithIntervals) {
+  const CostModelSet set = read_model_file("default");
+  ASSERT_FALSE(set.families.empty());
+  for (const auto& [name, m] : set.families)
+    for (const LevelFit* f : {&m.counters, &m.tree}) {
+      EXPECT_TRUE(std::isfinite(f->model.residual_log_sigma)) << name;
+      EXPECT_GT(f->model.residual_log_sigma, 0.0) << name;
+    }
 }
 
 TEST(CostModelFile, BuildersTakeTheFittedConstants) {

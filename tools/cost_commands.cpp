@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -14,6 +15,7 @@
 #include "cost/model_file.h"
 #include "cost/sweep.h"
 #include "geometry/input_error.h"
+#include "geometry/input_warning.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -23,11 +25,16 @@ void progress_line(const std::string& line) { std::cerr << "raylab: " << line <<
 
 std::string percent(double fraction) { return fmt::format("{:.1f}%", 100.0 * fraction); }
 
+/// A held-out error at most this many times the replicate error is as good as the machine can tell.
+constexpr double kReplicateVerdictRatio = 1.5;
+
 void print_level(const LevelFit& f, const char* title) {
-  std::cout << fmt::format("  {} model: held-out MAPE {}, R² {:.3f}{}; in-sample MAPE {}, R² {:.3f}; AIC {:.1f}, BIC "
-                           "{:.1f}, condition {:.3g}{}\n",
+  std::cout << fmt::format("  {} model: held-out MAPE {}, R² {:.3f}{}, 90% intervals cover {}; in-sample MAPE {}, R² "
+                           "{:.3f}; AIC {:.1f}, BIC {:.1f}, condition {:.3g}{}\n",
                            title, f.cross_validated ? percent(f.held_out_mape) : "n/a", f.held_out_r2,
                            f.cross_validated ? " (leave one scene out)" : " (one scene: nothing held out)",
+                           std::isfinite(f.held_out_coverage90) ? percent(f.held_out_coverage90) + " of held-out times"
+                                                                 : std::string("n/a"),
                            percent(f.in_sample_mape), f.in_sample_r2, f.aic, f.bic, f.condition_number,
                            f.converged ? "" : " NOT CONVERGED");
   for (std::size_t j = 0; j < f.model.terms.size(); ++j) {
@@ -45,6 +52,25 @@ void print_level(const LevelFit& f, const char* title) {
             << "\n";
   for (const auto& [family, terms] : f.by_scene_family)
     std::cout << "    scene family " << family << " needs: " << join(terms) << "\n";
+}
+
+/// The family's replicate error beside each level's held-out error, with the verdict where the
+/// model is as good as the machine's repeatability lets anyone tell.
+void print_replicate_error(const FamilyModel& m) {
+  if (!std::isfinite(m.replicate_error)) {
+    std::cout << "  replicate error: n/a (no case of this family measured twice)\n";
+    return;
+  }
+  std::cout << fmt::format("  replicate error {} over {} replicated cases", percent(m.replicate_error), m.replicate_groups);
+  for (const LevelFit* f : {&m.counters, &m.tree}) {
+    if (!f->cross_validated) continue;
+    const double ratio = m.replicate_error > 0 ? f->held_out_mape / m.replicate_error : std::numeric_limits<double>::infinity();
+    std::cout << fmt::format("; {} held-out MAPE {} = {:.2g}x it{}", level_name(f->model.level), percent(f->held_out_mape),
+                             ratio, ratio <= kReplicateVerdictRatio ? ": within 1.5x the replicate error: as good as "
+                                                                      "this machine can tell"
+                                                                    : "");
+  }
+  std::cout << "\n";
 }
 
 }  // namespace
@@ -137,9 +163,14 @@ int run_fit_command(const FitCommand& o) {
         auto& e = j["families"][name][level_name(f->model.level)];
         e["held_out_mape"] = f->held_out_mape;
         e["held_out_r2"] = f->held_out_r2;
+        e["held_out_coverage90"] = std::isfinite(f->held_out_coverage90) ? nlohmann::ordered_json(f->held_out_coverage90)
+                                                                         : nlohmann::ordered_json(nullptr);
         e["terms"] = f->model.terms;
         e["values"] = f->model.values;
       }
+      j["families"][name]["replicate_error"] =
+          std::isfinite(m.replicate_error) ? nlohmann::ordered_json(m.replicate_error) : nlohmann::ordered_json(nullptr);
+      j["families"][name]["replicate_groups"] = m.replicate_groups;
     }
     std::cout << j.dump() << "\n";
     return 0;
@@ -154,6 +185,7 @@ int run_fit_command(const FitCommand& o) {
       std::cout << fmt::format("    measured C_trav:C_isect = 1:{:.2f} (the lecture: 1:80 in pbrt, 1:1.5 optimized)\n",
                                test / node);
     print_level(m.tree, "tree");
+    print_replicate_error(m);
     std::cout << fmt::format("  builder constants (cost={}): c_trav {:.3g}, c_leaf {:.3g}, c_isect {:.3g} ns, from the {} "
                              "model\n",
                              o.out, m.builder.c_trav, m.builder.c_leaf, m.builder.c_isect, m.builder_source);
@@ -179,31 +211,38 @@ int run_predict_command(const PredictCommand& o) {
   const BuiltStructure built = build_structure(o.accel, scene, o.threads);
   const RunRecord features = record_for_prediction(built.features, ray_kind, scene->total_primitive_count());
 
-  // Refuse to extrapolate far beyond the data the model was fitted on.
-  std::vector<std::string> outside;
-  auto check = [&](const std::string& key, double v) {
-    const auto it = model.ranges.find(key);
-    if (it != model.ranges.end() && (v > 2.0 * it->second.hi || v < 0.5 * it->second.lo))
-      outside.push_back(fmt::format("{} {:.4g} (fitted on {:.4g}..{:.4g})", key, v, it->second.lo, it->second.hi));
-  };
-  check("primitives", static_cast<double>(features.primitives));
-  check("e_inner", features.e_inner);
-  check("e_tests", features.e_tests);
-  if (!outside.empty() && !o.allow_extrapolation) {
+  // The model knows its fitted range: outside it the interval widens, and --strict refuses.
+  const FamilyPrediction tree = model.predict(ModelLevel::tree, features);
+  const RangeCheck& range = tree.range;
+  if (o.strict && range.worst.factor > kStrictRangeFactor) {
     std::string list;
-    for (const auto& s : outside) list += (list.empty() ? "" : "; ") + s;
+    for (const FeatureRangeCheck& c : range.outside)
+      if (c.factor > kStrictRangeFactor)
+        list += (list.empty() ? "" : "; ") + fmt::format("{} {:.4g} (fitted on {:.4g}..{:.4g})", c.feature, c.value, c.lo, c.hi);
     throw InputError("predict: " + family + " is more than a factor 2 outside the model's data: " + list +
-                     " (pass --allow-extrapolation to predict anyway)");
+                     " (without --strict it predicts with a widened interval)");
   }
+  if (range.extrapolated())
+    warn_input(family + " is outside the model's data: " + range.worst.describe() + "; the interval is widened");
 
+  auto interval_json = [](const IntervalPrediction& p) {
+    return std::isfinite(p.lo) && std::isfinite(p.hi) ? nlohmann::ordered_json::array({p.lo, p.hi})
+                                                      : nlohmann::ordered_json(nullptr);
+  };
   nlohmann::ordered_json j;
   j["model"] = resolve_model_path(o.model);
   j["scene"] = o.scene;
   j["accel"] = o.accel;
   j["rays"] = o.rays;
   j["family"] = family;
-  j["predicted_ns_per_ray"] = model.tree.model.predict(features);
-  j["extrapolated"] = !outside.empty();
+  j["predicted_ns_per_ray"] = tree.interval.ns;
+  j["interval90_ns_per_ray"] = interval_json(tree.interval);
+  j["extrapolated"] = range.extrapolated();
+  if (range.extrapolated()) {
+    j["extrapolated_feature"] = range.worst.feature;
+    j["extrapolation_factor"] = range.worst.factor;
+    j["interval_widening"] = range.widening();
+  }
   if (o.measure) {
     const std::vector<Ray> rays = make_ray_set(o.rays, scene);
     const auto embree = make_accelerator("embree", scene);
@@ -212,11 +251,14 @@ int run_predict_command(const PredictCommand& o) {
     timing.min_passes = o.passes;
     timing.any_hit = is_any_hit_ray_spec(o.rays);
     const RunRecord measured = measure_case({0, o.scene, o.accel, o.rays}, *scene, built, *embree, rays, timing);
+    const FamilyPrediction counters = model.predict(ModelLevel::counters, measured);
     j["measured_ns_per_ray"] = measured.ns_per_ray_min;
     j["measured_ns_per_ray_median"] = measured.ns_per_ray_median;
+    j["measured_in_interval90"] = tree.interval.lo <= measured.ns_per_ray_min && measured.ns_per_ray_min <= tree.interval.hi;
     j["passes"] = measured.passes;
     j["embree_ns_per_ray"] = measured.embree_ns_per_ray_min;
-    j["predicted_from_counters_ns_per_ray"] = model.counters.model.predict(measured);
+    j["predicted_from_counters_ns_per_ray"] = counters.interval.ns;
+    j["interval90_from_counters_ns_per_ray"] = interval_json(counters.interval);
     j["nodes_per_ray"] = measured.nodes_per_ray;
     j["tests_per_ray"] = measured.tests_per_ray;
   }

@@ -38,7 +38,9 @@ int run_fit_command(const FitCommand& o);
 
 struct PredictCommand {
   std::string model = "default", scene, accel, rays = "primary:16384";
-  bool measure = false, json = false, allow_extrapolation = false;
+  bool measure = false, json = false;
+  bool strict = false;               ///< refuse a run more than kStrictRangeFactor outside the fitted range
+  bool allow_extrapolation = false;  ///< accepted for old scripts; predicting outside the range is the default
   int threads = 1;
   int passes = 5;
 };

@@ -458,8 +458,10 @@ int main(int argc, char** argv) {
   predict_cmd->add_flag("--measure", predict.measure, "also trace and time it as raylab sweep does");
   predict_cmd->add_option("--threads", predict.threads, "threads (default 1)");
   predict_cmd->add_option("--passes", predict.passes, "timed passes with --measure, at least 5");
+  predict_cmd->add_flag("--strict", predict.strict,
+                        "refuse to predict more than a factor 2 outside the data the model was fitted on");
   predict_cmd->add_flag("--allow-extrapolation", predict.allow_extrapolation,
-                        "predict even far outside the data the model was fitted on");
+                        "accepted for old scripts, no effect: outside the fitted range predict warns and widens the interval");
   predict_cmd->add_flag("--json", predict.json, "print one JSON object");
 
   try {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "geometry/input_error.h"
 
@@ -89,6 +90,38 @@ double FittedCostModel::predict(const RunRecord& run) const {
   double ns = 0;
   for (std::size_t j = 0; j < terms.size(); ++j) ns += values[j] * find_cost_term(level, terms[j]).feature(run);
   return ns;
+}
+
+double FittedCostModel::parameter_log_variance(const RunRecord& run) const {
+  const double ns = predict(run);
+  if (!(ns > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t k = terms.size();
+  if (covariance.size() != k * k) return 0.0;
+  const std::vector<double> x = feature_row(level, terms, run);
+  double variance = 0;
+  for (std::size_t i = 0; i < k; ++i)
+    for (std::size_t j = 0; j < k; ++j) variance += x[i] * covariance[i * k + j] * x[j];
+  return std::max(variance, 0.0) / (ns * ns);
+}
+
+IntervalPrediction FittedCostModel::predict_interval(const RunRecord& run, double replicate_log_sigma,
+                                                     double widening) const {
+  const double noise = std::isfinite(replicate_log_sigma) ? std::max(residual_log_sigma, replicate_log_sigma)
+                                                          : residual_log_sigma;
+  const double parameter = parameter_log_variance(run);
+  return log_normal_interval90(predict(run), std::sqrt(parameter + noise * noise), widening);
+}
+
+IntervalPrediction log_normal_interval90(double predicted, double log_sigma, double widening) {
+  IntervalPrediction p;
+  p.ns = predicted;
+  p.widening = widening;
+  if (!(predicted > 0) || !std::isfinite(log_sigma) || log_sigma < 0 || !(widening >= 1.0)) return p;
+  p.log_sigma = log_sigma;
+  const double half = kZ90 * log_sigma * widening;
+  p.lo = predicted * std::exp(-half);
+  p.hi = predicted * std::exp(half);
+  return p;
 }
 
 double FittedCostModel::value_of(const std::string& name) const {

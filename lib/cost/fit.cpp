@@ -151,18 +151,33 @@ void solve_and_describe(ceres::Problem& problem, const std::vector<Block>& block
   cov_options.apply_loss_function = true;
   ceres::Covariance covariance(cov_options);
   std::vector<std::pair<const double*, const double*>> pairs;
-  for (const Block& b : blocks) pairs.emplace_back(b.values, b.values);
-  if (covariance.Compute(pairs, &problem)) {
-    std::size_t offset = 0;
-    for (const Block& b : blocks) {
-      std::vector<double> cov(static_cast<std::size_t>(b.size * b.size));
-      if (covariance.GetCovarianceBlock(b.values, b.values, cov.data()) && std::isfinite(sigma2))
-        for (int i = 0; i < b.size; ++i) {
-          const double var = cov[static_cast<std::size_t>(i * b.size + i)];
-          if (var >= 0) out.std_errors[offset + static_cast<std::size_t>(i)] = std::sqrt(var * sigma2);
+  for (std::size_t a = 0; a < blocks.size(); ++a)
+    for (std::size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a].values, blocks[b].values);
+  if (covariance.Compute(pairs, &problem) && std::isfinite(sigma2)) {
+    // The whole matrix, block by block: rows of block a, columns of block b.
+    std::vector<double> full(k * k, 0.0);
+    bool complete = true;
+    std::size_t row = 0;
+    for (std::size_t a = 0; a < blocks.size(); ++a) {
+      std::size_t col = 0;
+      for (std::size_t b = 0; b < blocks.size(); ++b) {
+        const auto na = static_cast<std::size_t>(blocks[a].size), nb = static_cast<std::size_t>(blocks[b].size);
+        std::vector<double> cov(na * nb);
+        if (!covariance.GetCovarianceBlock(blocks[a].values, blocks[b].values, cov.data())) {
+          complete = false;
+          std::fill(cov.begin(), cov.end(), std::numeric_limits<double>::quiet_NaN());
         }
-      offset += static_cast<std::size_t>(b.size);
+        for (std::size_t i = 0; i < na; ++i)
+          for (std::size_t j = 0; j < nb; ++j) full[(row + i) * k + col + j] = cov[i * nb + j] * sigma2;
+        col += nb;
+      }
+      row += static_cast<std::size_t>(blocks[a].size);
     }
+    for (std::size_t i = 0; i < k; ++i)
+      if (full[i * k + i] >= 0) out.std_errors[i] = std::sqrt(full[i * k + i]);
+    bool finite = true;
+    for (double v : full) finite = finite && std::isfinite(v);
+    if (complete && finite) out.covariance = std::move(full);
   }
   const double n = static_cast<double>(residual_count);
   const double rss_per_point = std::max(out.rss / n, 1e-300);

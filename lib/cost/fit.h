@@ -16,7 +16,8 @@
 /// σ²·(JᵀJ)⁻¹, J the Jacobian of the residuals at the solution (ceres::Covariance, dense SVD,
 /// so rank deficiency is reported rather than fatal) and σ² = Σr²/(n - k) the residual variance.
 /// A parameter held at a bound is reported `at_bound`; its standard error then describes the
-/// unconstrained curvature only.
+/// unconstrained curvature only. `covariance` is the whole matrix σ²·(JᵀJ)⁻¹ (k×k, row-major,
+/// parameters in the model's order), from which a prediction's variance follows (cost_model.h).
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -37,6 +38,9 @@ struct FitOptions {
 struct FitResult {
   std::vector<double> values;
   std::vector<double> std_errors;  ///< NaN where the covariance could not be computed
+  /// σ²·(JᵀJ)⁻¹, k×k row-major in the order of `values`; empty when it could not be computed
+  /// (n ≤ k, or Ceres' covariance failed).
+  std::vector<double> covariance;
   std::vector<bool> at_bound;
   std::size_t points = 0;
   double rss = 0.0;        ///< Σ r_i² of the (relative or absolute) residuals

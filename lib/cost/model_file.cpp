@@ -44,10 +44,23 @@ Json level_json(const LevelFit& f) {
                     {"in_sample_mape", number_or_null(s.in_sample_mape)},
                     {"aic", number_or_null(s.aic)},
                     {"bic", number_or_null(s.bic)}});
+  const std::size_t k = f.model.terms.size();
+  Json covariance = nullptr;
+  if (f.model.covariance.size() == k * k) {
+    covariance = Json::array();
+    for (std::size_t i = 0; i < k; ++i)
+      covariance.push_back(std::vector<double>(f.model.covariance.begin() + static_cast<std::ptrdiff_t>(i * k),
+                                               f.model.covariance.begin() + static_cast<std::ptrdiff_t>((i + 1) * k)));
+  }
   return {{"terms", terms},
+          {"covariance", covariance},
+          {"residual_log_sigma", number_or_null(f.model.residual_log_sigma)},
           {"in_sample", {{"mape", f.in_sample_mape}, {"r2", f.in_sample_r2}}},
           {"held_out",
-           {{"cross_validated", f.cross_validated}, {"mape", f.held_out_mape}, {"r2", f.held_out_r2}}},
+           {{"cross_validated", f.cross_validated},
+            {"mape", f.held_out_mape},
+            {"r2", f.held_out_r2},
+            {"coverage90", number_or_null(f.held_out_coverage90)}}},
           {"aic", f.aic},
           {"bic", f.bic},
           {"condition_number", number_or_null(f.condition_number)},
@@ -105,7 +118,12 @@ class Reader {
   std::string where_;
 };
 
-LevelFit read_level(const Reader& r, ModelLevel level) {
+/// The log-space spread of a version-1 file's model, which stored no residual spread: for
+/// log-normal errors of spread s, MAPE ≈ E|ε| = s·√(2/π), so s ≈ MAPE·√(π/2) (held-out MAPE when
+/// cross-validated).
+double log_sigma_from_mape(double mape) { return mape * std::sqrt(std::acos(-1.0) / 2.0); }
+
+LevelFit read_level(const Reader& r, ModelLevel level, int version) {
   LevelFit f;
   f.model.level = level;
   const Json& terms = r.at("terms");
@@ -131,6 +149,29 @@ LevelFit read_level(const Reader& r, ModelLevel level) {
   f.cross_validated = out.boolean("cross_validated");
   f.held_out_mape = out.number("mape");
   f.held_out_r2 = out.number("r2");
+  if (version >= 2) {
+    f.held_out_coverage90 = out.number("coverage90", true);
+    f.model.residual_log_sigma = r.number("residual_log_sigma", true);
+    const Json& cov = r.at("covariance");
+    const std::size_t k = f.model.terms.size();
+    if (!cov.is_null()) {
+      if (!cov.is_array() || cov.size() != k)
+        throw InputError(r.where() + ".covariance: expected null or a " + std::to_string(k) + "x" + std::to_string(k) +
+                         " matrix (one row per term)");
+      for (std::size_t i = 0; i < k; ++i) {
+        if (!cov[i].is_array() || cov[i].size() != k)
+          throw InputError(r.where() + ".covariance[" + std::to_string(i) + "]: expected " + std::to_string(k) +
+                           " numbers");
+        for (const Json& v : cov[i]) {
+          if (!v.is_number() || !std::isfinite(v.get<double>()))
+            throw InputError(r.where() + ".covariance[" + std::to_string(i) + "]: expected finite numbers");
+          f.model.covariance.push_back(v.get<double>());
+        }
+      }
+    }
+  } else {
+    f.model.residual_log_sigma = log_sigma_from_mape(f.cross_validated ? f.held_out_mape : f.in_sample_mape);
+  }
   f.aic = r.number("aic");
   f.bic = r.number("bic");
   f.condition_number = r.number("condition_number", true);
@@ -174,7 +215,9 @@ void write_model_file(const CostModelSet& set, const std::string& path) {
                         {"c_leaf", m.builder.c_leaf},
                         {"c_isect", m.builder.c_isect},
                         {"source", m.builder_source}}},
-                      {"ranges", ranges}};
+                      {"ranges", ranges},
+                      {"replicate_error", number_or_null(m.replicate_error)},
+                      {"replicate_groups", m.replicate_groups}};
   }
   const Json j = {{"format", kFormat},
                   {"version", CostModelSet::kVersion},
@@ -210,10 +253,11 @@ CostModelSet read_model_file(const std::string& path_in) {
   const Reader root(j, path);
   if (!root.at("format").is_string() || root.string("format") != kFormat)
     throw InputError(path + ": not a raylab cost model (format is not '" + std::string(kFormat) + "')");
-  const double version = root.number("version");
-  if (version != CostModelSet::kVersion)
-    throw InputError(path + ": cost model version " + root.at("version").dump() + ", this raylab reads version " +
+  const double version_number = root.number("version");
+  if (version_number != 1 && version_number != CostModelSet::kVersion)
+    throw InputError(path + ": cost model version " + root.at("version").dump() + ", this raylab reads versions 1 to " +
                      std::to_string(CostModelSet::kVersion) + " (refit it with raylab fit)");
+  const int version = static_cast<int>(version_number);
   CostModelSet set;
   set.created = root.string("created");
   const Reader data = root.object("data");
@@ -239,8 +283,14 @@ CostModelSet read_model_file(const std::string& path_in) {
     m.family = it.key();
     m.rows = static_cast<std::size_t>(f.number("rows"));
     m.scenes = f.strings("scenes");
-    m.counters = read_level(f.object("counters"), ModelLevel::counters);
-    m.tree = read_level(f.object("tree"), ModelLevel::tree);
+    m.counters = read_level(f.object("counters"), ModelLevel::counters, version);
+    m.tree = read_level(f.object("tree"), ModelLevel::tree, version);
+    if (version >= 2) {
+      m.replicate_error = f.number("replicate_error", true);
+      const double groups = f.number("replicate_groups");
+      if (groups < 0) throw InputError(f.where() + ".replicate_groups: expected a count >= 0");
+      m.replicate_groups = static_cast<std::size_t>(groups);
+    }
     const Reader b = f.object("builder");
     m.builder = {b.number("c_trav"), b.number("c_leaf"), b.number("c_isect")};
     m.builder_source = b.string("source");

@@ -3,9 +3,14 @@
 /// predict`, by the builders' `cost=` (fitted_cost.h) and by the `auto` accelerator. The format
 /// is documented in docs/cost_model.md; its top level is
 ///
-///   {"format": "raylab-cost-model", "version": 1, "created": ..., "data": {...}, "fit": {...},
-///    "families": {"kdtree": {"counters": {...}, "tree": {...}, "builder": {...}, ...}, ...}}
+///   {"format": "raylab-cost-model", "version": 2, "created": ..., "data": {...}, "fit": {...},
+///    "families": {"kdtree": {"counters": {...}, "tree": {...}, "builder": {...}, "ranges": {...},
+///                            "replicate_error": ..., "replicate_groups": ...}, ...}}
 ///
+/// Version 2 added what the 90% intervals need (cost_model.h): each level's "covariance" (k×k or
+/// null), "residual_log_sigma" and "held_out.coverage90", and each family's "replicate_error" and
+/// "replicate_groups". Version-1 files are still read: they have no covariance, coverage or
+/// replicate error, and their residual spread is estimated from the stored MAPE (s ≈ MAPE·√(π/2)).
 /// A file of another format or version, a missing key, or a non-finite value is an InputError
 /// naming the file and the key.
 #include <string>

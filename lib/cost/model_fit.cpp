@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "cost/output_file.h"
 #include "geometry/input_error.h"
@@ -12,7 +15,23 @@
 namespace raylab {
 namespace {
 
-LevelFit fit_level(ModelLevel level, const std::vector<RunRecord>& runs, const FitOptions& options) {
+/// sqrt(Σ ln²(measured/predicted) / (n - k)) of a model over the rows it was fitted on; NaN when
+/// n ≤ k or a prediction is not positive.
+double in_sample_log_sigma(const FittedCostModel& model, const std::vector<RunRecord>& runs) {
+  const std::size_t k = model.terms.size();
+  if (runs.size() <= k) return std::numeric_limits<double>::quiet_NaN();
+  double sum = 0;
+  for (const RunRecord& r : runs) {
+    const double predicted = model.predict(r);
+    if (!(predicted > 0)) return std::numeric_limits<double>::quiet_NaN();
+    const double e = std::log(r.ns_per_ray_min / predicted);
+    sum += e * e;
+  }
+  return std::sqrt(sum / static_cast<double>(runs.size() - k));
+}
+
+LevelFit fit_level(ModelLevel level, const std::vector<RunRecord>& runs, const FitOptions& options,
+                   double replicate_sigma) {
   LevelFit out;
   const TermSelection sel = select_terms(level, runs, options);
   FitResult fit;
@@ -30,6 +49,10 @@ LevelFit fit_level(ModelLevel level, const std::vector<RunRecord>& runs, const F
     out.held_out_mape = sel.held_out.mape;
     out.held_out_r2 = sel.held_out.r2;
     out.held_out_predictions = sel.held_out.predicted;
+    out.held_out_coverage90 = held_out_coverage90(sel.held_out, runs, replicate_sigma);
+    out.model.residual_log_sigma = held_out_log_sigma(sel.held_out, runs);
+  } else {
+    out.model.residual_log_sigma = in_sample_log_sigma(out.model, runs);
   }
   out.dropped = sel.dropped;
   out.unused = sel.unused;
@@ -75,6 +98,79 @@ FittedSahCost builder_constants(const FittedCostModel& model, const std::vector<
 }
 
 }  // namespace
+
+double range_feature(const std::string& name, const RunRecord& run) {
+  if (name == "primitives") return static_cast<double>(run.primitives);
+  if (name == "e_inner") return run.e_inner;
+  if (name == "e_tests") return run.e_tests;
+  if (name == "sah_1_1") return run.sah_1_1;
+  throw InputError("unknown range feature '" + name + "' (valid: primitives, e_inner, e_tests, sah_1_1)");
+}
+
+std::string FeatureRangeCheck::describe() const {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s %.3g is %.*fx %s the fitted %.6g..%.6g", feature.c_str(), value, factor < 10 ? 1 : 0,
+                factor, above() ? "above" : "below", lo, hi);
+  return buf;
+}
+
+double range_widening(double factor) { return factor > 1.0 ? 1.0 + std::log2(factor) : 1.0; }
+
+double RangeCheck::widening() const { return range_widening(worst.factor); }
+
+FeatureRangeCheck check_feature_range(const std::string& feature, double value, const FittedRange& range) {
+  FeatureRangeCheck c;
+  c.feature = feature;
+  c.value = value;
+  c.lo = range.lo;
+  c.hi = range.hi;
+  if (c.value > c.hi) c.factor = c.hi > 0 ? c.value / c.hi : std::numeric_limits<double>::infinity();
+  else if (c.value < c.lo) c.factor = c.value > 0 ? c.lo / c.value : std::numeric_limits<double>::infinity();
+  return c;
+}
+
+RangeCheck FamilyModel::check_range(const RunRecord& run) const {
+  RangeCheck check;
+  for (const std::string& feature : kRangeFeatures) {
+    const auto it = ranges.find(feature);
+    if (it == ranges.end()) continue;
+    const FeatureRangeCheck c = check_feature_range(feature, range_feature(feature, run), it->second);
+    if (!c.outside()) continue;
+    check.outside.push_back(c);
+    if (c.factor > check.worst.factor) check.worst = c;
+  }
+  return check;
+}
+
+FamilyPrediction FamilyModel::predict(ModelLevel level, const RunRecord& run) const {
+  FamilyPrediction p;
+  p.range = check_range(run);
+  p.interval = level_fit(level).model.predict_interval(run, replicate_log_sigma(replicate_error), p.range.widening());
+  return p;
+}
+
+ReplicateError replicate_error(const std::vector<RunRecord>& runs) {
+  std::map<std::tuple<std::string, std::string, std::string, std::int64_t>, std::vector<double>> groups;
+  for (const RunRecord& r : runs) groups[{r.scene, r.accel, r.rays, r.threads}].push_back(r.ns_per_ray_min);
+  ReplicateError out;
+  double sum = 0;
+  for (const auto& [key, times] : groups) {
+    if (times.size() < 2) continue;
+    double pairs = 0, group = 0;
+    for (std::size_t a = 0; a < times.size(); ++a)
+      for (std::size_t b = a + 1; b < times.size(); ++b) {
+        const double mean = 0.5 * (times[a] + times[b]);
+        group += mean > 0 ? std::abs(times[a] - times[b]) / mean : 0.0;
+        pairs += 1;
+      }
+    sum += group / pairs;
+    ++out.groups;
+  }
+  if (out.groups) out.mape = sum / static_cast<double>(out.groups);
+  return out;
+}
+
+double replicate_log_sigma(double replicate_mape) { return replicate_mape * std::sqrt(std::acos(-1.0)) / 2.0; }
 
 const FamilyModel& CostModelSet::family(const std::string& name) const {
   const auto it = families.find(name);
@@ -146,9 +242,13 @@ CostModelSet fit_cost_model_set(const std::vector<RunRecord>& measured, const Fi
     for (const RunRecord& r : rows) scenes.insert(r.scene);
     m.scenes.assign(scenes.begin(), scenes.end());
     if (progress) progress(name + ": fitting the counters and tree models on " + std::to_string(rows.size()) + " rows");
+    const ReplicateError replicates = replicate_error(rows);
+    m.replicate_error = replicates.mape;
+    m.replicate_groups = replicates.groups;
+    const double replicate_sigma = replicate_log_sigma(m.replicate_error);
     try {
-      m.counters = fit_level(ModelLevel::counters, rows, options);
-      m.tree = fit_level(ModelLevel::tree, rows, options);
+      m.counters = fit_level(ModelLevel::counters, rows, options, replicate_sigma);
+      m.tree = fit_level(ModelLevel::tree, rows, options, replicate_sigma);
     } catch (const InputError& e) {
       throw InputError("structure family '" + name + "' (" + std::to_string(rows.size()) + " rows): " + e.what());
     }
@@ -172,18 +272,14 @@ CostModelSet fit_cost_model_set(const std::vector<RunRecord>& measured, const Fi
       resolve(m.builder.c_trav, "node");
       resolve(m.builder.c_isect, "test");
     }
-    auto range_of = [&](double (*f)(const RunRecord&)) {
-      FittedRange range{f(rows.front()), f(rows.front())};
+    for (const char* feature : {"primitives", "e_inner", "e_tests", "sah_1_1"}) {
+      FittedRange range{range_feature(feature, rows.front()), range_feature(feature, rows.front())};
       for (const RunRecord& r : rows) {
-        range.lo = std::min(range.lo, f(r));
-        range.hi = std::max(range.hi, f(r));
+        range.lo = std::min(range.lo, range_feature(feature, r));
+        range.hi = std::max(range.hi, range_feature(feature, r));
       }
-      return range;
-    };
-    m.ranges["primitives"] = range_of([](const RunRecord& r) { return static_cast<double>(r.primitives); });
-    m.ranges["e_inner"] = range_of([](const RunRecord& r) { return r.e_inner; });
-    m.ranges["e_tests"] = range_of([](const RunRecord& r) { return r.e_tests; });
-    m.ranges["sah_1_1"] = range_of([](const RunRecord& r) { return r.sah_1_1; });
+      m.ranges[feature] = range;
+    }
     set.families[name] = std::move(m);
   }
   return set;

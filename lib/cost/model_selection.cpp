@@ -62,6 +62,7 @@ FittedCostModel fit_cost_model(ModelLevel level, const std::vector<std::string>&
   m.terms = terms;
   m.values = fit.values;
   m.std_errors = fit.std_errors;
+  m.covariance = fit.covariance;
   if (details) *details = fit;
   return m;
 }
@@ -70,6 +71,7 @@ HeldOutPrediction leave_one_scene_out(ModelLevel level, const std::vector<std::s
                                       const std::vector<RunRecord>& runs, const FitOptions& options) {
   HeldOutPrediction out;
   out.predicted.assign(runs.size(), std::numeric_limits<double>::quiet_NaN());
+  out.parameter_log_variance.assign(runs.size(), std::numeric_limits<double>::quiet_NaN());
   std::set<std::string> scenes;
   for (const RunRecord& r : runs) scenes.insert(r.scene);
   if (scenes.size() < 2) return out;
@@ -83,7 +85,10 @@ HeldOutPrediction leave_one_scene_out(ModelLevel level, const std::vector<std::s
     try {
       const FittedCostModel model = fit_cost_model(level, terms, train, options);
       for (std::size_t i = 0; i < runs.size(); ++i)
-        if (runs[i].scene == held_out[s]) out.predicted[i] = model.predict(runs[i]);
+        if (runs[i].scene == held_out[s]) {
+          out.predicted[i] = model.predict(runs[i]);
+          out.parameter_log_variance[i] = model.parameter_log_variance(runs[i]);
+        }
     } catch (const InputError&) {  // fewer rows than terms without this scene
       failed = true;
     }
@@ -94,6 +99,36 @@ HeldOutPrediction leave_one_scene_out(ModelLevel level, const std::vector<std::s
   out.r2 = coefficient_of_determination(out.predicted, y);
   out.valid = true;
   return out;
+}
+
+double held_out_log_sigma(const HeldOutPrediction& p, const std::vector<RunRecord>& runs,
+                          const std::string& except_scene) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < runs.size() && i < p.predicted.size(); ++i) {
+    if (runs[i].scene == except_scene || !(p.predicted[i] > 0) || !(runs[i].ns_per_ray_min > 0)) continue;
+    const double e = std::log(runs[i].ns_per_ray_min / p.predicted[i]);
+    sum += e * e;
+    ++n;
+  }
+  return n ? std::sqrt(sum / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
+}
+
+double held_out_coverage90(const HeldOutPrediction& p, const std::vector<RunRecord>& runs, double replicate_log_sigma) {
+  if (!p.valid || runs.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::map<std::string, double> sigma_without;  // s_res of the other scenes' held-out rows, per scene
+  std::size_t inside = 0;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    auto it = sigma_without.find(runs[i].scene);
+    if (it == sigma_without.end())
+      it = sigma_without.emplace(runs[i].scene, held_out_log_sigma(p, runs, runs[i].scene)).first;
+    const double noise = std::isfinite(replicate_log_sigma) ? std::max(it->second, replicate_log_sigma) : it->second;
+    const double parameter = std::isfinite(p.parameter_log_variance[i]) ? p.parameter_log_variance[i] : 0.0;
+    const IntervalPrediction interval = log_normal_interval90(p.predicted[i], std::sqrt(parameter + noise * noise));
+    const double y = runs[i].ns_per_ray_min;
+    if (y >= interval.lo && y <= interval.hi) ++inside;  // false for a NaN interval
+  }
+  return static_cast<double>(inside) / static_cast<double>(runs.size());
 }
 
 TermSelection select_terms(ModelLevel level, const std::vector<RunRecord>& runs, const FitOptions& options) {

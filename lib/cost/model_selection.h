@@ -13,6 +13,13 @@
 ///
 /// With fewer than two scenes there is nothing to hold out: the in-sample BIC decides instead,
 /// and `cross_validated` is false.
+///
+/// Coverage of the 90% intervals (cost_model.h), measured on held-out scenes: a row of scene S
+/// gets the prediction and the constants' covariance of the model fitted without S, and the
+/// residual spread s_res of the held-out predictions of every other scene (so S's own errors do
+/// not widen its interval), with the replicate floor; coverage90 is the share of rows whose
+/// measured time lies inside. A held-out prediction ≤ 0 counts as outside. Replicate rows share
+/// their scene, so they are always held out together.
 #include <map>
 #include <string>
 #include <vector>
@@ -25,6 +32,8 @@ namespace raylab {
 
 struct HeldOutPrediction {
   std::vector<double> predicted;  ///< per run, from the model fitted without the run's scene
+  /// per run, xᵀΣx/ŷ² of that model (cost_model.h: parameter_log_variance)
+  std::vector<double> parameter_log_variance;
   double mape = 0.0;
   double r2 = 0.0;
   bool valid = false;  ///< false with fewer than two scenes, or when a fold could not be fitted
@@ -33,6 +42,15 @@ struct HeldOutPrediction {
 /// Leave-one-scene-out predictions of `terms` over `runs`.
 HeldOutPrediction leave_one_scene_out(ModelLevel level, const std::vector<std::string>& terms,
                                       const std::vector<RunRecord>& runs, const FitOptions& options);
+
+/// sqrt(mean ln²(measured/predicted)) over the held-out rows whose scene is not `except_scene`
+/// (empty: every row) and whose prediction is positive; NaN when there is none.
+double held_out_log_sigma(const HeldOutPrediction& p, const std::vector<RunRecord>& runs,
+                          const std::string& except_scene = {});
+
+/// The share of `runs` whose measured time lies inside its held-out 90% interval (header
+/// comment), with the floor `replicate_log_sigma` (NaN: none); NaN when `p` is not valid.
+double held_out_coverage90(const HeldOutPrediction& p, const std::vector<RunRecord>& runs, double replicate_log_sigma);
 
 /// One model on the elimination path.
 struct ScoredModel {
