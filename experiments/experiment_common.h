@@ -202,6 +202,31 @@ inline std::string decide_conditional(const std::vector<std::string>& cases) {
   return any_confirmed ? kConfirmed : any_refuted ? kRefuted : kInconclusive;
 }
 
+/// The verdict of a claim that must hold in every case: confirmed if every case is, refuted if any
+/// case is, inconclusive at this noise otherwise.
+inline std::string decide_all(const std::vector<std::string>& cases) {
+  bool all_confirmed = !cases.empty();
+  for (const auto& c : cases) {
+    if (c == kRefuted) return kRefuted;
+    all_confirmed &= c == kConfirmed;
+  }
+  return all_confirmed ? kConfirmed : kInconclusive;
+}
+
+/// A 95% interval from a mean and its standard error over many samples (normal approximation,
+/// value ± 1.96·s.e.), e.g. a proportion over thousands of lines.
+inline KeyNumber normal_key(std::string name, double value, double std_error, long samples, std::string spec) {
+  KeyNumber k;
+  k.name = std::move(name);
+  k.value = value;
+  k.lo = value - 1.96 * std_error;
+  k.hi = value + 1.96 * std_error;
+  k.replicates = samples;
+  k.spec = std::move(spec);
+  k.interval = "± 1.96·s.e. (normal approximation over " + std::to_string(samples) + " samples)";
+  return k;
+}
+
 /// One verdict of the report's summary table. Each experiment writes the verdicts of its section
 /// to <section>.verdicts.csv (write_verdicts); make_report.py gathers every such file into the
 /// table that opens docs/results/README.md, the list that closes it and results.json, so none is
