@@ -97,6 +97,8 @@ TriangleMesh box_hull(const Bounds3f& b) {
 int main(int argc, char** argv) {
   const Options opt = parse_options(argc, argv, "Crofton's theorem: mean projected area S/4 and hit probability S_o/S_c");
   try {
+    if (!opt.claim.empty() && !opt.runs_claim({"3", "3b", "3c"}))
+      throw InputError("--claim " + opt.claim + ": exp_crofton decides claims 3, 3b and 3c only (all from one run)");
     const int directions = opt.full() ? 20000 : 2000;
     const std::size_t line_count = opt.full() ? 2000000 : 200000;
     CsvWriter csv(opt.out + "/crofton.csv", {"part", "body", "kind", "triangles", "surface_area", "predicted",
