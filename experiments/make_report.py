@@ -118,13 +118,20 @@ def read_numbers(out: pathlib.Path) -> list:
     return numbers
 
 
+def significant_digits(x, lo, hi) -> int:
+    """Enough significant digits to resolve the interval's width (at least 3)."""
+    scale, width = max(abs(x), abs(lo), abs(hi)), hi - lo
+    return min(10, max(3, math.ceil(math.log10(scale / width)) + 2)) if width > 0 and scale > 0 else 3
+
+
 def interval_cell(v) -> str:
     lo, hi, x = as_float(v.get("ci95_lo")), as_float(v.get("ci95_hi")), as_float(v.get("key_value"))
     if x is None:
         return "–"
     if lo is None or hi is None:
         return f"{x:.4g} (no interval)"
-    return f"{x:.4g} [{lo:.4g}, {hi:.4g}], n = {v.get('replicates', '?')}"
+    d = significant_digits(x, lo, hi)
+    return f"{x:.{d}g} [{lo:.{d}g}, {hi:.{d}g}], n = {v.get('replicates', '?')}"
 
 
 def summary_table(verdicts, anchors) -> list:
@@ -169,7 +176,8 @@ def cache_sizes() -> dict:
                       ("L3", "LEVEL3_CACHE_SIZE")]:
         size = run_text(["getconf", key])
         if size.isdigit() and int(size) > 0:
-            caches[name] = f"{int(size) // 1024}K"
+            kib = int(size) // 1024
+            caches[name] = f"{kib // 1024}M" if kib >= 1024 and kib % 1024 == 0 else f"{kib}K"
     return caches
 
 
@@ -181,6 +189,21 @@ def cpu_model() -> str:
     except OSError:
         pass
     return "unknown"
+
+
+def physical_cores():
+    """Distinct (physical id, core id) pairs of /proc/cpuinfo; None when it does not say."""
+    pairs, physical = set(), "0"
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            if key.strip() == "physical id":
+                physical = value.strip()
+            elif key.strip() == "core id":
+                pairs.add((physical, value.strip()))
+    except OSError:
+        return None
+    return len(pairs) or None
 
 
 def compiler() -> str:
@@ -206,14 +229,15 @@ def library_versions() -> dict:
 
 
 def machine_info() -> dict:
-    return {"cpu": cpu_model(), "cores": os.cpu_count(), "caches": cache_sizes(), "compiler": compiler(),
-            "libraries": library_versions()}
+    return {"cpu": cpu_model(), "cores": physical_cores(), "threads": os.cpu_count(), "caches": cache_sizes(),
+            "compiler": compiler(), "libraries": library_versions()}
 
 
 def machine_line(m: dict, revision: str) -> str:
     caches = ", ".join(f"{k} {v}" for k, v in m["caches"].items()) or "cache sizes unknown"
     libs = ", ".join(f"{k} {v}" for k, v in m["libraries"].items())
-    return (f"**Machine**: {m['cpu']}, {m['cores']} hardware threads ({caches}); compiler {m['compiler']}; "
+    cores = f"{m['cores']} cores, " if m.get("cores") else ""
+    return (f"**Machine**: {m['cpu']}, {cores}{m['threads']} hardware threads ({caches}); compiler {m['compiler']}; "
             f"{libs} (Debian packages); commit measured {revision}.")
 
 
@@ -261,8 +285,12 @@ def changes_section(previous, current) -> list:
     claims_now = compare_results.entries(current)
     claims_then = compare_results.entries(previous)
     spec_changed = {s["id"]: s for s in d["changed_specs"]}
-    rows = [(m["id"], f"key number {m['name']}: {m['a']:.4g} [{m['ci95'][0]:.4g}, {m['ci95'][1]:.4g}] → {m['b']:.4g}")
-            for m in d["moved"]]
+    rows = []
+    for m in d["moved"]:
+        lo, hi = m["ci95"]
+        k = significant_digits(m["a"] if m["a"] is not None else m["b"], lo, hi)
+        a = "–" if m["a"] is None else f"{m['a']:.{k}g}"
+        rows.append((m["id"], f"key number {m['name']}: {a} [{lo:.{k}g}, {hi:.{k}g}] → {m['b']:.{k}g}"))
     rows += [(f["id"], f"verdict {f['a']} → {f['b']}") for f in d["flipped"]]
     rows += [(s["id"], "spec changed, number inside its interval")
              for s in d["changed_specs"] if s["id"] not in {r[0] for r in rows}]
