@@ -245,9 +245,14 @@ struct Verdict {
 /// The line that opens a section with an anchor the summary table links to.
 inline std::string section_anchor(const std::string& id) { return "<a id=\"" + id + "\"></a>\n\n"; }
 
-/// "0.152 [0.115, 0.189]" with `digits` significant digits.
-inline std::string interval_text(const KeyNumber& k, int digits = 3) {
-  char buf[128];
+/// "0.152 (95% interval [0.115, 0.189], n = 6)", with enough significant digits to resolve the
+/// interval's width (at least 3).
+inline std::string interval_text(const KeyNumber& k) {
+  int digits = 3;
+  const double width = k.hi - k.lo, scale = std::max({std::abs(k.value), std::abs(k.lo), std::abs(k.hi)});
+  if (std::isfinite(width) && width > 0 && scale > 0)
+    digits = std::clamp(static_cast<int>(std::ceil(std::log10(scale / width))) + 2, 3, 10);
+  char buf[160];
   std::snprintf(buf, sizeof buf, "%.*g (95%% interval [%.*g, %.*g], n = %ld)", digits, k.value, digits, k.lo, digits,
                 k.hi, k.replicates);
   return buf;
