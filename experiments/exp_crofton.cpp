@@ -331,9 +331,10 @@ int main(int argc, char** argv) {
         verdicts[2], fmt::format("The conditional probability follows the ratio of surface areas over {} pairs of "
                                  "different shapes, the largest deviation {:.1f} standard errors of its pair.",
                                  nested.points, worst_pair));
-    md += "![Crofton's theorem](crofton.png)\n\n*Figure: mean projected area against S/4 for the convex bodies, "
-          "mean silhouette against S/4 for the non-convex meshes, and P(inner | outer) against S_o/S_c for the "
-          "nested pairs; on the diagonal where the claim holds.*\n\n";
+    md += "![Crofton's theorem](crofton.png)\n\n*Figure: left, mean projected (or silhouette) area over S/4 for every "
+          "body and mesh, error bars 2 s.e.: the convex bodies sit on 1, the non-convex meshes' silhouettes fall "
+          "short of it; right, P(inner | outer) against S_o/S_c for the nested pairs, on the diagonal where claim 3c "
+          "holds.*\n\n";
     md += fmt::format("Data: crofton.csv. Measured by `build/experiments/exp_crofton --mode {}` (run by `./lab report`). {}.\n",
                       opt.mode, provenance());
     std::ofstream(opt.out + "/crofton.md") << md;
