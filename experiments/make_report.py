@@ -333,7 +333,7 @@ def main() -> int:
         spec.loader.exec_module(module)
         module.plot(out)
     fragments = {p.stem: p for p in out.glob("*.md") if p.name != "README.md"}
-    names = [n for n in ORDER if n in fragments] + sorted(n for n in fragments if n not in ORDER)
+    names = [n for n in dict.fromkeys(ORDER) if n in fragments] + sorted(n for n in fragments if n not in ORDER)
     texts = {n: fragments[n].read_text().rstrip() for n in names}
     anchors = set(re.findall(r'<a id="([^"]+)"></a>', "\n".join(texts.values())))
     revision = git_revision()
