@@ -97,6 +97,8 @@ TriangleMesh box_hull(const Bounds3f& b) {
 int main(int argc, char** argv) {
   const Options opt = parse_options(argc, argv, "Crofton's theorem: mean projected area S/4 and hit probability S_o/S_c");
   try {
+    if (!opt.claim.empty() && !opt.runs_claim({"3", "3b", "3c"}))
+      throw InputError("--claim " + opt.claim + ": exp_crofton decides claims 3, 3b and 3c only (all from one run)");
     const int directions = opt.full() ? 20000 : 2000;
     const std::size_t line_count = opt.full() ? 2000000 : 200000;
     CsvWriter csv(opt.out + "/crofton.csv", {"part", "body", "kind", "triangles", "surface_area", "predicted",
@@ -147,6 +149,21 @@ int main(int argc, char** argv) {
         "inside the other: the fraction of {} isotropic lines meeting the outer that also meet the inner. Every ± is "
         "one standard error of the sampling. Command: `build/experiments/exp_crofton --mode {}`.\n\n",
         meshes.size(), std::size(polytopes), directions, line_count, line_count, opt.mode);
+    const std::string spec = fmt::format("exp_crofton:mode={},directions={},lines={}", opt.mode, directions, line_count);
+    const std::string command = "build/experiments/exp_crofton --mode " + opt.mode;
+    const Threshold t3{"Cauchy's formula is exact, so c in Ā = c·S/4 (fitted over every body) must lie within 1 ± 0.01: "
+                       "confirmed where c's 95% interval lies inside (0.99, 1.01), refuted where it lies outside",
+                       "within", 1.0, 0.01};
+    const Threshold t3b{"a non-convex silhouette hides part of the surface, so the largest ratio mean silhouette / (S/4) "
+                        "over the non-convex meshes must lie below 1: confirmed where its 95% interval lies below 1",
+                        "below", 1.0};
+    const Threshold t3c{"Crofton's formula is exact, so c = P(inner | outer)/(S_o/S_c) (the pairs' ratios pooled by "
+                        "their sampling errors) must lie within 1 ± 0.05 (the pairs' line samples leave a few per cent of sampling error): confirmed "
+                        "where c's 95% interval lies inside (0.95, 1.05), refuted where it lies outside",
+                        "within", 1.0, 0.05};
+    md += "**Thresholds, stated before measuring.** Claim 3: " + t3.text + ". Claim 3b: " + t3b.text + ". Claim 3c: " +
+          t3c.text + ". Intervals of fitted constants are value ± t(0.975, points − 1)·s.e.; of a sampled ratio, "
+          "± 1.96·s.e.\n\nReproduce: `" + command + "` (all three claims come from one run).\n\n";
     md += "### 1. Convex bodies: mean projected area against S/4\n\n| body | kind | faces | S | S/4 | mean projected area | "
           "ratio |\n|---|---|---|---|---|---|---|\n";
     std::vector<std::vector<double>> conv_x;
@@ -174,7 +191,7 @@ int main(int argc, char** argv) {
     // 2. Non-convex meshes.
     md += "### 2. Non-convex meshes: mean silhouette area against S/4\n\n| mesh | triangles | S | S/4 | mean silhouette "
           "area (lines) | ratio | its hull: lines | its hull: projections |\n|---|---|---|---|---|---|---|---|\n";
-    double lo_ratio = 1e300, hi_ratio = 0;
+    double lo_ratio = 1e300, hi_ratio = 0, hi_ratio_se = 0;
     std::vector<std::vector<double>> hull_x;
     std::vector<double> hull_y;
     for (std::size_t i = 0; i < meshes.size(); ++i) {
@@ -194,7 +211,7 @@ int main(int argc, char** argv) {
                         format_with_error(mean, se), format_with_error(mean / (area / 4), se / (area / 4)),
                         format_with_error(disk * hp, disk * hpse), hull_exact);
       lo_ratio = std::min(lo_ratio, mean / (area / 4));
-      hi_ratio = std::max(hi_ratio, mean / (area / 4));
+      if (mean / (area / 4) > hi_ratio) hi_ratio = mean / (area / 4), hi_ratio_se = se / (area / 4);
       hull_x.push_back({hull_exact});
       hull_y.push_back(disk * hp);
     }
@@ -229,7 +246,7 @@ int main(int argc, char** argv) {
     pairs.push_back({"flat: Gaussian 1 : 1 : 0.001", "the box [-5, 5]^3", bodies[meshes.size() + 5].hull,
                      box_hull(Bounds3f(Vec3f(-5.0f), Vec3f(5.0f)))});
     std::vector<std::vector<double>> pair_x;
-    std::vector<double> pair_y;
+    std::vector<double> pair_y, pair_ratio, pair_ratio_se;
     double worst_pair = 0;
     for (std::size_t i = 0; i < pairs.size(); ++i) {
       const auto& pr = pairs[i];
@@ -256,27 +273,50 @@ int main(int argc, char** argv) {
       if (inner_only > 0) md += fmt::format("| | ({} lines met the inner body but not the outer: it is not inside) | | | | |\n", inner_only);
       pair_x.push_back({predicted});
       pair_y.push_back(p);
+      pair_ratio.push_back(p / predicted);
+      pair_ratio_se.push_back(se / predicted);
       worst_pair = std::max(worst_pair, std::abs(p - predicted) / se);
     }
     const FitResult nested = fit_linear_terms(pair_x, pair_y, plain);
     md += fmt::format("\nFit of measured = c · S_o/S_c over the {} pairs: **c = {}**; the largest deviation of one pair "
                       "is {:.1f} standard errors.\n\n",
                       nested.points, format_with_error(nested.values[0], nested.std_errors[0]), worst_pair);
-    md += "![Crofton's theorem](crofton.png)\n\n";
+    // The pairs' ratios have known, very different sampling errors (binomial over the lines): their
+    // inverse-variance weighted mean, its s.e. scaled by the Birge ratio √(χ²/(n − 1)) where the
+    // ratios scatter more than their errors say.
+    double w_sum = 0, wr_sum = 0;
+    for (std::size_t i = 0; i < pair_ratio.size(); ++i) {
+      const double w = 1 / (pair_ratio_se[i] * pair_ratio_se[i]);
+      w_sum += w;
+      wr_sum += w * pair_ratio[i];
+    }
+    const double pooled = wr_sum / w_sum;
+    double chi2 = 0;
+    for (std::size_t i = 0; i < pair_ratio.size(); ++i) chi2 += std::pow((pair_ratio[i] - pooled) / pair_ratio_se[i], 2);
+    const double birge = std::max(1.0, std::sqrt(chi2 / static_cast<double>(pair_ratio.size() - 1)));
+    const double pooled_se = birge / std::sqrt(w_sum);
+    md += fmt::format("Inverse-variance weighted mean of the pairs' ratios (each weighted by its sampling error; s.e. "
+                      "scaled by the Birge ratio √(χ²/(n − 1)) = {:.2f}): **c = {}**, the key number of claim 3c.\n\n",
+                      birge, format_with_error(pooled, pooled_se));
 
-    auto within = [](const FitResult& f) { return std::abs(f.values[0] - 1) <= 2 * f.std_errors[0] + 1e-9; };
+    const KeyNumber k3 = fitted_key("c in Ā = c·S/4", conv, 0, spec);
+    const KeyNumber k3b = normal_key("largest mean silhouette / (S/4) of a non-convex mesh", hi_ratio, hi_ratio_se,
+                                     static_cast<long>(line_count), spec);
+    KeyNumber k3c = fitted_key("c: inverse-variance weighted mean of P(inner | outer) / (S_o/S_c)", pooled, pooled_se,
+                               pair_ratio.size(), 1, spec);
+    k3c.interval += ", Birge-scaled";
     std::vector<Verdict> verdicts = {
-        {"3", "mean projected area of a convex body = S/4", within(conv) && worst_dev < 4 ? "confirmed" : "refuted",
+        {"3", "mean projected area of a convex body = S/4", decide_verdict(k3, t3),
          fmt::format("Ā = c·S/4, c = {} over {} hulls and polytopes", format_with_error(conv.values[0], conv.std_errors[0]),
                      conv.points),
-         "claim-3"},
-        {"3b", "S/4 needs convexity: non-convex silhouettes fall short", hi_ratio < 1 ? "confirmed" : "refuted",
+         "claim-3", k3, t3, command},
+        {"3b", "S/4 needs convexity: non-convex silhouettes fall short", decide_verdict(k3b, t3b),
          fmt::format("mean silhouette / (S/4) = {:.2f} … {:.2f} on {} closed demo meshes", lo_ratio, hi_ratio, meshes.size()),
-         "claim-3"},
-        {"3c", "P(hit inner | hit outer) = S_o/S_c", within(nested) && worst_pair < 4 ? "confirmed" : "refuted",
-         fmt::format("measured = c·S_o/S_c, c = {} over {} nested pairs", format_with_error(nested.values[0], nested.std_errors[0]),
-                     nested.points),
-         "claim-3"}};
+         "claim-3", k3b, t3b, command},
+        {"3c", "P(hit inner | hit outer) = S_o/S_c", decide_verdict(k3c, t3c),
+         fmt::format("measured = c·S_o/S_c, c = {} (weighted mean) over {} nested pairs", format_with_error(pooled, pooled_se),
+                     pair_ratio.size()),
+         "claim-3", k3c, t3c, command}};
     md += verdict_paragraph(
         verdicts[0], fmt::format("Round, cubic, needle-like, flat and far-from-origin polytopes and the hulls of real "
                                  "meshes: c − 1 = {:+.5f}, the largest deviation of one body {:.1f} of its standard "
@@ -291,6 +331,10 @@ int main(int argc, char** argv) {
         verdicts[2], fmt::format("The conditional probability follows the ratio of surface areas over {} pairs of "
                                  "different shapes, the largest deviation {:.1f} standard errors of its pair.",
                                  nested.points, worst_pair));
+    md += "![Crofton's theorem](crofton.png)\n\n*Figure: left, mean projected (or silhouette) area over S/4 for every "
+          "body and mesh, error bars 2 s.e.: the convex bodies sit on 1, the non-convex meshes' silhouettes fall "
+          "short of it; right, P(inner | outer) against S_o/S_c for the nested pairs, on the diagonal where claim 3c "
+          "holds.*\n\n";
     md += fmt::format("Data: crofton.csv. Measured by `build/experiments/exp_crofton --mode {}` (run by `./lab report`). {}.\n",
                       opt.mode, provenance());
     std::ofstream(opt.out + "/crofton.md") << md;

@@ -7,11 +7,25 @@ Plots: every module experiments/plot_*.py has a function plot(out_dir: pathlib.P
 reads its experiment's CSV from out_dir (returning quietly when it is absent) and writes PNGs.
 
 Verdicts: every experiment that tests a claim of the lecture writes <section>.verdicts.csv (claim,
-title, verdict, key, anchor; experiments/experiment_common.h). The page opens with a summary table
-of all of them and closes with the list of verdicts, both generated here, never edited by hand."""
+title, verdict, key, anchor, then the structured key number and threshold; experiments/
+experiment_common.h). The page opens with the machine it was measured on, a summary table of all
+verdicts (each linking to its verdict paragraph, anchor verdict-<claim>) and the changes since the
+last report, and closes with the list of verdicts, all generated here, never edited by hand.
+
+results.json: the same verdicts with their key numbers, 95% intervals, replicates and full specs,
+the machine, and the noise floor (noise_floor.json, written by exp_noise_floor, when present), in
+the format compare_results.py reads. Before writing it, the results.json committed at HEAD (or the
+file given by --previous) is compared with the new one, and every key number that left its
+interval and every verdict that flipped is listed under "Changes since the last report" with its
+cause: the spec changed, code changed (commits between the two revisions touching the experiment's
+source or lib/), or noise (neither)."""
+import argparse
 import csv
 import datetime
 import importlib.util
+import json
+import math
+import os
 import re
 import pathlib
 import subprocess
@@ -22,9 +36,21 @@ import matplotlib
 matplotlib.use("Agg")
 sys.path.insert(0, str(pathlib.Path(__file__).parent))  # figures.py, shared by the plot modules
 
-# Fragments in reading order; any other *.md fragment follows alphabetically.
-ORDER = ["image_log_objects", "oracle_agreement", "grids", "spatial", "surface_area", "crofton", "bvh",
-         "ray_shooting_bounds", "speed_accuracy", "cost_model", "robustness"]
+import compare_results  # noqa: E402  (the comparison of two results files, shared with the tool)
+
+REPO = pathlib.Path(__file__).resolve().parent.parent
+
+# Fragments in reading order: the noise floor, the claims in their order (1, 2, 3, 4, 5, 6, 7), then
+# the cost model, robustness, speed and accuracy; any other *.md fragment follows alphabetically.
+ORDER = ["noise_floor", "image_log_objects", "surface_area", "crofton", "spatial", "ray_shooting_bounds", "grids", "bvh",
+         "cost_model", "robustness", "speed_accuracy", "oracle_agreement", "certainty"]
+
+# The experiment whose source measures each verdicts file's claims, when not exp_<section>.cpp.
+SOURCE = {"ray_shooting_bounds": "experiments/exp_image_log_objects.cpp"}
+
+# The verdict strings of experiment_common.h, as results.json names them.
+VERDICT_CLASS = {"confirmed": "confirmed", "refuted": "refuted", "holds only under stated conditions": "conditional",
+                 "inconclusive at this noise": "inconclusive"}
 
 
 def claim_key(claim: str):
@@ -34,24 +60,185 @@ def claim_key(claim: str):
 
 
 def read_verdicts(out: pathlib.Path):
+    """Every row of every *.verdicts.csv, in claim order; each row also names its section."""
     rows = []
     for path in sorted(out.glob("*.verdicts.csv")):
+        section = path.name[:-len(".verdicts.csv")]
         with path.open(newline="") as f:
-            rows.extend(csv.DictReader(f))
+            for row in csv.DictReader(f):
+                row["section"] = section
+                rows.append(row)
     return sorted(rows, key=lambda r: claim_key(r["claim"]))
 
 
-def summary_table(verdicts) -> list:
+def as_float(text):
+    """A CSV field as a float; None for an empty, non-numeric or NaN field."""
+    try:
+        x = float(text)
+    except (TypeError, ValueError):
+        return None
+    return None if math.isnan(x) or math.isinf(x) else x
+
+
+def claim_entry(v) -> dict:
+    """A verdicts.csv row as results.json's claim entry."""
+    entry = {"id": v["claim"], "title": v["title"], "verdict": VERDICT_CLASS.get(v["verdict"], v["verdict"]),
+             "verdict_text": v["verdict"], "section": v["section"],
+             "source": SOURCE.get(v["section"], f"experiments/exp_{v['section']}.cpp")}
+    if v.get("threshold"):
+        entry["threshold"] = {"text": v["threshold"], "direction": v.get("threshold_direction") or None,
+                              "value": as_float(v.get("threshold_value")),
+                              "tolerance": as_float(v.get("threshold_tolerance"))}
+    else:
+        entry["threshold"] = None
+    if v.get("key_name"):
+        entry["key"] = {"name": v["key_name"], "value": as_float(v.get("key_value")),
+                        "ci95": [as_float(v.get("ci95_lo")), as_float(v.get("ci95_hi"))],
+                        "replicates": int(as_float(v.get("replicates")) or 0), "spec": v.get("spec") or "",
+                        "interval": v.get("interval") or ""}
+    else:
+        entry["key"] = None
+    entry["key_text"] = v["key"]
+    if v.get("command"):
+        entry["command"] = v["command"]
+    return entry
+
+
+def read_numbers(out: pathlib.Path) -> list:
+    """Other key numbers of the sections, from *.numbers.csv (id, name, value, ci95_lo, ci95_hi,
+    replicates, spec), in results.json's form."""
+    numbers = []
+    for path in sorted(out.glob("*.numbers.csv")):
+        with path.open(newline="") as f:
+            for r in csv.DictReader(f):
+                numbers.append({"id": r["id"], "key": {
+                    "name": r.get("name", ""), "value": as_float(r.get("value")),
+                    "ci95": [as_float(r.get("ci95_lo")), as_float(r.get("ci95_hi"))],
+                    "replicates": int(as_float(r.get("replicates")) or 0), "spec": r.get("spec") or ""}})
+    return numbers
+
+
+def significant_digits(x, lo, hi) -> int:
+    """Enough significant digits to resolve the interval's width (at least 3)."""
+    scale, width = max(abs(x), abs(lo), abs(hi)), hi - lo
+    return min(10, max(3, math.ceil(math.log10(scale / width)) + 2)) if width > 0 and scale > 0 else 3
+
+
+def interval_cell(v) -> str:
+    lo, hi, x = as_float(v.get("ci95_lo")), as_float(v.get("ci95_hi")), as_float(v.get("key_value"))
+    if x is None:
+        return "–"
+    if lo is None or hi is None:
+        return f"{x:.4g} (no interval)"
+    d = significant_digits(x, lo, hi)
+    return f"{x:.{d}g} [{lo:.{d}g}, {hi:.{d}g}], n = {v.get('replicates', '?')}"
+
+
+def summary_table(verdicts, anchors) -> list:
+    """The table that opens the page; each row links to its claim's verdict paragraph where the
+    fragments have its anchor (verdict-<claim>), else to its section."""
     if not verdicts:
         return []
     def cell(text: str) -> str:
         return text.replace("|", "\\|")
 
-    lines = ["| claim | verdict | key number | section |", "|---|---|---|---|"]
+    lines = ["| claim | verdict | key number | 95% interval | verdict and section |", "|---|---|---|---|---|"]
     for v in verdicts:
+        target = f"verdict-{v['claim']}" if f"verdict-{v['claim']}" in anchors else v["anchor"]
         lines.append(f"| {v['claim']}. {cell(v['title'])} | **{v['verdict']}** | {cell(v['key'])} | "
-                     f"[section](#{v['anchor']}) |")
+                     f"{cell(interval_cell(v))} | [verdict](#{target}) |")
     return lines + [""]
+
+
+def run_text(cmd, cwd=REPO) -> str:
+    """The first line of a command's output; "" when it cannot be run."""
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return ""
+    return r.stdout.strip() if r.returncode == 0 else ""
+
+
+def cache_sizes() -> dict:
+    """Cache sizes of CPU 0 from sysfs (/sys/devices/system/cpu/cpu0/cache), else from getconf."""
+    caches = {}
+    for index in sorted(pathlib.Path("/sys/devices/system/cpu/cpu0/cache").glob("index*")):
+        try:
+            level = (index / "level").read_text().strip()
+            kind = (index / "type").read_text().strip()
+            size = (index / "size").read_text().strip()
+        except OSError:
+            continue
+        caches["L" + level + {"Data": "d", "Instruction": "i"}.get(kind, "")] = size
+    if caches:
+        return caches
+    for name, key in [("L1d", "LEVEL1_DCACHE_SIZE"), ("L1i", "LEVEL1_ICACHE_SIZE"), ("L2", "LEVEL2_CACHE_SIZE"),
+                      ("L3", "LEVEL3_CACHE_SIZE")]:
+        size = run_text(["getconf", key])
+        if size.isdigit() and int(size) > 0:
+            kib = int(size) // 1024
+            caches[name] = f"{kib // 1024}M" if kib >= 1024 and kib % 1024 == 0 else f"{kib}K"
+    return caches
+
+
+def cpu_model() -> str:
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "unknown"
+
+
+def physical_cores():
+    """Distinct (physical id, core id) pairs of /proc/cpuinfo; None when it does not say."""
+    pairs, physical = set(), "0"
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            if key.strip() == "physical id":
+                physical = value.strip()
+            elif key.strip() == "core id":
+                pairs.add((physical, value.strip()))
+    except OSError:
+        return None
+    return len(pairs) or None
+
+
+def compiler() -> str:
+    """The C++ compiler of the build directory (build/CMakeCache.txt), else c++, with its version."""
+    cxx = "c++"
+    try:
+        for line in (REPO / "build" / "CMakeCache.txt").read_text().splitlines():
+            if line.startswith("CMAKE_CXX_COMPILER:"):
+                cxx = line.split("=", 1)[1]
+    except OSError:
+        pass
+    version = run_text([cxx, "--version"]).splitlines()
+    return version[0] if version else cxx
+
+
+def library_versions() -> dict:
+    """Debian package versions of the libraries the measurements depend on."""
+    versions = {}
+    for name, package in [("CGAL", "libcgal-dev"), ("Embree", "libembree-dev"), ("Ceres", "libceres-dev"),
+                          ("OpenMesh", "libopenmesh-dev"), ("TBB", "libtbb-dev")]:
+        versions[name] = run_text(["dpkg-query", "-W", "-f=${Version}", package]) or "unknown"
+    return versions
+
+
+def machine_info() -> dict:
+    return {"cpu": cpu_model(), "cores": physical_cores(), "threads": os.cpu_count(), "caches": cache_sizes(),
+            "compiler": compiler(), "libraries": library_versions()}
+
+
+def machine_line(m: dict, revision: str) -> str:
+    caches = ", ".join(f"{k} {v}" for k, v in m["caches"].items()) or "cache sizes unknown"
+    libs = ", ".join(f"{k} {v}" for k, v in m["libraries"].items())
+    cores = f"{m['cores']} cores, " if m.get("cores") else ""
+    return (f"**Machine**: {m['cpu']}, {cores}{m['threads']} hardware threads ({caches}); compiler {m['compiler']}; "
+            f"{libs} (Debian packages); commit measured {revision}.")
 
 
 def closing_note(verdicts) -> list:
@@ -65,18 +252,78 @@ def closing_note(verdicts) -> list:
 
 
 def git_revision() -> str:
+    return run_text(["git", "rev-parse", "HEAD"]) or "unknown"
+
+
+def previous_results(path) -> dict:
+    """The earlier results.json: `path` if given, else the one committed at HEAD; None if there is
+    none or it cannot be read as one."""
     try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                              check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+        text = pathlib.Path(path).read_text() if path else run_text(["git", "show", "HEAD:docs/results/results.json"])
+        return compare_results.parse_results(text, str(path or "HEAD:docs/results/results.json")) if text else None
+    except (OSError, compare_results.ResultsError):
+        return None
+
+
+def commits_touching(a_rev: str, b_rev: str, paths) -> list:
+    """Short hashes of the commits after a_rev up to b_rev that touch `paths`."""
+    if not a_rev or not b_rev or a_rev == b_rev:
+        return []
+    out = run_text(["git", "log", "--format=%h", f"{a_rev}..{b_rev}", "--", *paths])
+    return out.split() if out else []
+
+
+def changes_section(previous, current) -> list:
+    """"Changes since the last report": every verdict that flipped and every key number outside
+    the previous interval, with its cause."""
+    lines = ["## Changes since the last report", ""]
+    if previous is None:
+        return lines + ["No earlier results.json is committed: nothing to compare with.", ""]
+    d = compare_results.compare(previous, current)
+    lines.append(f"Against the report of revision {str(previous.get('revision'))[:12]}: {compare_results.summary_line(d)}.")
+    lines.append("")
+    claims_now = compare_results.entries(current)
+    claims_then = compare_results.entries(previous)
+    spec_changed = {s["id"]: s for s in d["changed_specs"]}
+    rows = []
+    for m in d["moved"]:
+        lo, hi = m["ci95"]
+        k = significant_digits(m["a"] if m["a"] is not None else m["b"], lo, hi)
+        a = "–" if m["a"] is None else f"{m['a']:.{k}g}"
+        rows.append((m["id"], f"key number {m['name']}: {a} [{lo:.{k}g}, {hi:.{k}g}] → {m['b']:.{k}g}"))
+    rows += [(f["id"], f"verdict {f['a']} → {f['b']}") for f in d["flipped"]]
+    rows += [(s["id"], "spec changed, number inside its interval")
+             for s in d["changed_specs"] if s["id"] not in {r[0] for r in rows}]
+    if not rows:
+        return lines + ["Every verdict is unchanged and every key number lies inside its previous 95% interval.", ""]
+    lines += ["| claim | change | cause |", "|---|---|---|"]
+    for cid, what in rows:
+        if cid in spec_changed:
+            s = spec_changed[cid]
+            cause = f"spec or default changed: `{s['a']}` → `{s['b']}`"
+        else:
+            source = (claims_now.get(cid) or claims_then.get(cid) or {}).get("source")
+            commits = commits_touching(previous.get("revision"), current.get("revision"),
+                                       [p for p in [source, "lib/"] if p])
+            cause = (f"code changed: {', '.join(commits[:8])}{' …' if len(commits) > 8 else ''} touch "
+                     f"{source or 'the experiment'} or lib/") if commits else "noise: neither the code nor the spec changed"
+        lines.append(f"| {cid} | {what.replace('|', chr(92) + '|')} | {cause.replace('|', chr(92) + '|')} |")
+    return lines + [""]
+
+
+def results_json(verdicts, numbers, machine, noise_floor, revision) -> dict:
+    return {"format": compare_results.FORMAT, "version": compare_results.VERSION, "revision": revision,
+            "created": datetime.date.today().isoformat(), "machine": machine, "noise_floor": noise_floor,
+            "claims": [claim_entry(v) for v in verdicts], "numbers": numbers}
 
 
 def main() -> int:
-    if len(sys.argv) != 2:
-        print("usage: make_report.py RESULTS_DIR", file=sys.stderr)
-        return 2
-    out = pathlib.Path(sys.argv[1])
+    parser = argparse.ArgumentParser(description="Builds the plots, docs/results/README.md and results.json.")
+    parser.add_argument("results_dir")
+    parser.add_argument("--previous", help="the earlier results.json to compare with (default: the one committed at "
+                                           "HEAD)")
+    args = parser.parse_args()
+    out = pathlib.Path(args.results_dir)
     if not out.is_dir():
         print(f"make_report.py: error: {out} is not a directory", file=sys.stderr)
         return 2
@@ -86,19 +333,34 @@ def main() -> int:
         spec.loader.exec_module(module)
         module.plot(out)
     fragments = {p.stem: p for p in out.glob("*.md") if p.name != "README.md"}
-    names = [n for n in ORDER if n in fragments] + sorted(n for n in fragments if n not in ORDER)
+    names = [n for n in dict.fromkeys(ORDER) if n in fragments] + sorted(n for n in fragments if n not in ORDER)
+    texts = {n: fragments[n].read_text().rstrip() for n in names}
+    anchors = set(re.findall(r'<a id="([^"]+)"></a>', "\n".join(texts.values())))
+    revision = git_revision()
+    machine = machine_info()
+    try:
+        noise_floor = json.loads((out / "noise_floor.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        noise_floor = None
+    verdicts = read_verdicts(out)
+    results = results_json(verdicts, read_numbers(out), machine, noise_floor, revision)
+    previous = previous_results(args.previous)
     page = ["# raylab results: theory against practice", "",
-            f"Generated by `./lab report` on {datetime.date.today().isoformat()} at git revision {git_revision()}. "
+            f"Generated by `./lab report` on {datetime.date.today().isoformat()} at git revision {revision[:12]}. "
             "Every number below comes from the experiment binary each section names; speed figures are single-thread "
             "unless stated, measured against Embree in the same process and run. The theory each claim comes from, "
-            "with full citations, is in [docs/theory.md](../theory.md).", ""]
-    verdicts = read_verdicts(out)
-    page += summary_table(verdicts)
+            "with full citations and the threshold each verdict is decided by, is in [docs/theory.md](../theory.md). "
+            "The same verdicts, key numbers, intervals and specs are in [results.json](results.json); "
+            "`experiments/compare_results.py A.json B.json` compares two of them.", "",
+            machine_line(machine, revision), ""]
+    page += summary_table(verdicts, anchors)
+    page += changes_section(previous, results)
     for n in names:
-        page.append(fragments[n].read_text().rstrip())
+        page.append(texts[n])
         page.append("")
     page += closing_note(verdicts)
     (out / "README.md").write_text("\n".join(page) + "\n")
+    (out / "results.json").write_text(json.dumps(results, indent=1, ensure_ascii=False, allow_nan=False) + "\n")
     return 0
 
 
