@@ -47,8 +47,8 @@ def plot_mismatches(out: pathlib.Path) -> None:
         for j in range(table.shape[1]):
             v = table[i, j]
             if not np.isnan(v):
-                ax.text(j, i, "0" if v == 0 else f"{v:.0f}" if v >= 10 else f"{v:.2g}", ha="center", va="center", fontsize=6.5,
-                        color="white" if v > 60 else "black")
+                text = "0" if v == 0 else f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+                ax.text(j, i, text, ha="center", va="center", fontsize=6.5, color="white" if v > 60 else "black")
     fig.colorbar(im, ax=ax, label="% of rays mismatching the exact oracle (0-100)", shrink=0.5, pad=0.02)
     ax.set_xlabel("Where methods fail: share of rays mismatching the exact oracle, per case (left) and per contact "
                   "class over every case (right); blank: no ray of the class", fontsize=8)
