@@ -396,6 +396,7 @@ int main(int argc, char** argv) {
         for (double r : ratios)
           md += a == "embree" ? fmt::format(" {:.0f} ns |", at[a][r].ns)
                               : fmt::format(" {:.0f} ({:.1f}× Embree) |", at[a][r].ops(), at[a][r].ns / at["embree"][r].ns);
+        md += "\n";
       }
       md += "\n*Cells*: operations per ray (node and leaf visits plus primitive tests), and time per ray relative to "
             "Embree's on the same rays.\n\n![the teapot in a stadium](grids_teapot.png)\n\n";

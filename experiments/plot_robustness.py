@@ -11,10 +11,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-BUCKETS = ["crossing", "touching", "on_surface", "ill_conditioned"]
+CLASSES = ["crossing", "touching", "on_surface", "ill_conditioned"]
 
 
 def plot_mismatches(out: pathlib.Path) -> None:
+    """A heat table, one row per method: the share of rays mismatching per case group, then per contact
+    class (robustness.csv's class columns, summed over the cases: the per-class table's numbers)."""
     csv = out / "robustness.csv"
     if not csv.exists():
         return
@@ -24,29 +26,34 @@ def plot_mismatches(out: pathlib.Path) -> None:
     agg = df.groupby(["group", "accel"], sort=False)[["mismatches", "rays"]].sum().reset_index()
     groups = list(dict.fromkeys(agg["group"]))
     accels = list(dict.fromkeys(agg["accel"]))
-    rate = np.zeros((len(groups), len(accels)))
+    rate = np.zeros((len(accels), len(groups)))
     for _, r in agg.iterrows():
-        rate[groups.index(r["group"]), accels.index(r["accel"])] = 100.0 * r["mismatches"] / max(1, r["rays"])
-    per_class = None
+        rate[accels.index(r["accel"]), groups.index(r["group"])] = 100.0 * r["mismatches"] / max(1, r["rays"])
+    columns = list(groups)
+    table = rate
     if "rays_crossing" in df.columns:
-        sums = df.groupby("accel", sort=False)[[f"{k}_{b}" for b in BUCKETS for k in ("rays", "mismatches")]].sum()
-        per_class = np.array([[100.0 * sums.loc[a, f"mismatches_{b}"] / max(1, sums.loc[a, f"rays_{b}"]) for a in accels]
-                              for b in BUCKETS])
-    rows = len(groups) + (len(BUCKETS) + 1 if per_class is not None else 0)
-    fig, ax = plt.subplots(figsize=(1.0 + 0.45 * len(accels), 1.5 + 0.42 * rows))
-    table = rate if per_class is None else np.vstack([rate, np.full((1, len(accels)), np.nan), per_class])
-    labels = groups if per_class is None else groups + [""] + [f"class: {b}" for b in BUCKETS]
-    im = ax.imshow(table, cmap="Reds", vmin=0, vmax=max(1.0, np.nanmax(table)), aspect="auto")
-    ax.set_xticks(range(len(accels)), accels, rotation=60, ha="right", fontsize=6)
-    ax.set_yticks(range(len(labels)), labels, fontsize=7)
-    for i in range(table.shape[0]):
-        for j in range(len(accels)):
-            if not np.isnan(table[i, j]):
-                ax.text(j, i, f"{table[i, j]:.1f}" if table[i, j] else "0", ha="center", va="center", fontsize=5)
-    fig.colorbar(im, ax=ax, label="% of rays mismatching the exact oracle")
-    ax.set_title("Where methods fail: mismatches with the exact oracle, per case and per contact class")
+        sums = df.groupby("accel", sort=False)[[f"{k}_{c}" for c in CLASSES for k in ("rays", "mismatches")]].sum()
+        per_class = np.array([[100.0 * sums.loc[a, f"mismatches_{c}"] / sums.loc[a, f"rays_{c}"]
+                               if sums.loc[a, f"rays_{c}"] else np.nan for c in CLASSES] for a in accels])
+        table = np.hstack([rate, np.full((len(accels), 1), np.nan), per_class])
+        columns = groups + [""] + [f"class: {c} ({int(sums[f'rays_{c}'].iloc[0])} rays)" for c in CLASSES]
+    fig, ax = plt.subplots(figsize=(3.5 + 0.62 * len(columns), 1.8 + 0.2 * len(accels)))
+    im = ax.imshow(table, cmap="Reds", vmin=0, vmax=100, aspect="auto")
+    ax.set_yticks(range(len(accels)), accels, fontsize=7)
+    ax.set_xticks(range(len(columns)), columns, rotation=35, ha="right", fontsize=8)
+    ax.xaxis.tick_top()
+    plt.setp(ax.get_xticklabels(), ha="left", rotation=35)
+    for i in range(len(accels)):
+        for j in range(table.shape[1]):
+            v = table[i, j]
+            if not np.isnan(v):
+                text = "0" if v == 0 else f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+                ax.text(j, i, text, ha="center", va="center", fontsize=6.5, color="white" if v > 60 else "black")
+    fig.colorbar(im, ax=ax, label="% of rays mismatching the exact oracle (0-100)", shrink=0.5, pad=0.02)
+    ax.set_xlabel("Where methods fail: share of rays mismatching the exact oracle, per case (left) and per contact "
+                  "class over every case (right); blank: no ray of the class", fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "robustness.png", dpi=120)
+    fig.savefig(out / "robustness.png", dpi=100)
     plt.close(fig)
 
 

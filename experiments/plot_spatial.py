@@ -17,7 +17,7 @@ def _bars(ax, g, label_cols, value, title, xlabel):
     labels = [", ".join(str(r[c]) for c in label_cols) for _, r in g.iterrows()]
     ax.barh(range(len(g)), g[value].to_numpy(float))
     ax.set_yticks(range(len(g)))
-    ax.set_yticklabels(labels, fontsize=6)
+    ax.set_yticklabels(labels, fontsize=7)
     ax.set_title(title, fontsize=9)
     ax.set_xlabel(xlabel)
     ax.grid(True, axis="x", alpha=0.3)
@@ -37,14 +37,18 @@ def plot(out: pathlib.Path) -> None:
     if len(r):
         ax = axes[0][1]
         ci = r["param"].str.split(":").str[1].astype(float)
-        ax.plot(ci, r["ns_per_ray"], marker="o", label="ns/ray")
-        ax.plot(ci, r["tests_per_ray"], marker="s", label="tests/ray")
-        ax.plot(ci, r["nodes_per_ray"], marker="^", label="nodes/ray")
+        # Time on the left axis, counts on the right: one unit per axis.
+        ax.plot(ci, r["ns_per_ray"], marker="o", color="tab:blue", label="time per ray (ns, left axis)")
+        cx = ax.twinx()
+        cx.plot(ci, r["tests_per_ray"], marker="s", color="tab:orange", label="primitive tests per ray (right axis)")
+        cx.plot(ci, r["nodes_per_ray"], marker="^", color="tab:green", label="nodes visited per ray (right axis)")
         ax.set_xscale("log")
         ax.set_xlabel("C_isect (C_trav = 1)")
-        ax.set_ylabel("per ray (ns, or count)")
+        ax.set_ylabel("time per ray (ns, 1 thread)", color="tab:blue")
+        cx.set_ylabel("tests or nodes per ray (count)")
         ax.set_title("C_trav : C_isect sweep", fontsize=9)
-        ax.legend(fontsize=7)
+        handles = ax.get_legend_handles_labels()[0] + cx.get_legend_handles_labels()[0]
+        ax.legend(handles, [h.get_label() for h in handles], fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
         ax.grid(True, alpha=0.3)
     b = df[df["part"] == "build"]
     fits = read_fits(out / "spatial_fits.csv")
