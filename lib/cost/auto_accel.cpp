@@ -213,7 +213,9 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   if (!best) throw InputError("auto: no candidate the cost model " + model_path + " predicts could be built");
   if (next < ranked.size()) {
     second_k = ranked[next];
-    if (candidates[second_k].total_lo_s <= candidates[best_k].total_hi_s) second = build(second_k);
+    const AutoCandidate &b = candidates[best_k], &r = candidates[second_k];
+    const double budget = kAutoSampleBudget * (choice.count > 0 ? b.predicted_total_s : b.predicted_build_s);
+    if (r.total_lo_s <= b.total_hi_s && r.predicted_build_s <= budget) second = build(second_k);
   }
   if (second) {
     choice.sampled = true;

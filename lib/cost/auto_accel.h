@@ -16,7 +16,9 @@
 /// features alone (scene_features.h, one O(N) pass) it predicts each candidate's build seconds and
 /// its ns per ray, and keeps the candidate of least predicted build + N × trace time; candidates
 /// the model has no entry for (by accel_spec_key.h) are skipped. It builds only that one, unless
-/// the 90% intervals of the best two totals overlap: then it builds both, times each on
+/// the 90% intervals of the best two totals overlap and the runner-up's predicted build is at most
+/// kAutoSampleBudget of the best's predicted total (else a second build costs more than a wrong
+/// pick can): then it builds both, times each on
 /// kAutoSampleRays rays of the kind chosen for (the fastest of 3 passes, one thread), and keeps
 /// the lower measured build + N × trace time (`sampled`). Without `count` the predicted time per
 /// ray alone decides (as for infinitely many rays). A model file without those models gives
@@ -35,6 +37,9 @@ inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
 /// Rays each of the two best candidates is timed on when their intervals overlap (split evenly
 /// over the kinds of `mixed`).
 inline constexpr std::size_t kAutoSampleRays = 384;
+/// The most a second build may cost, as a fraction of the best candidate's predicted total (of its
+/// predicted build without `count=`).
+inline constexpr double kAutoSampleBudget = 0.1;
 
 struct AutoCandidate {
   std::string spec;

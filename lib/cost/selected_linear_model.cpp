@@ -13,6 +13,10 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Fits of the reweighting (the weights settle within a few rounds).
+constexpr int kReweightingRounds = 4;
+/// A prediction below this fraction of its measurement weighs as if it were this fraction.
+constexpr double kLeastPredictedFraction = 0.1;
 
 /// The 90% quantile (nearest rank) of `v`; NaN when empty.
 double quantile90(std::vector<double> v) {
@@ -62,7 +66,25 @@ SelectedLinearModel fit_terms(const std::vector<std::string>& terms, const std::
   const Design d = design_of(terms, rows);
   std::vector<std::vector<double>> a;
   for (const FeatureRow& row : rows) a.push_back(scaled_row(d, row));
-  const FitResult fit = fit_linear_terms(a, ys, options);
+  // Residuals (ŷ - y)/√(y·ŷ), the first-order ln(ŷ/y), by reweighting: absolute residuals of rows
+  // scaled by w_i = 1/√(y_i·ŷ_i) of the previous fit, starting from ŷ = y (relative residuals).
+  FitOptions weighted = options;
+  weighted.residual = ResidualKind::absolute;
+  std::vector<double> predicted = ys;
+  FitResult fit;
+  for (int round = 0; round < kReweightingRounds; ++round) {
+    std::vector<std::vector<double>> aw = a;
+    std::vector<double> yw = ys;
+    for (std::size_t i = 0; i < ys.size(); ++i) {
+      const double w = 1.0 / std::sqrt(ys[i] * std::max(predicted[i], kLeastPredictedFraction * ys[i]));
+      for (double& v : aw[i]) v *= w;
+      yw[i] *= w;
+    }
+    fit = fit_linear_terms(aw, yw, weighted);
+    for (std::size_t i = 0; i < ys.size(); ++i) predicted[i] = predict_linear_terms(fit.values, a[i]);
+  }
+  fit.mape = mean_absolute_percentage_error(predicted, ys);
+  fit.r2 = coefficient_of_determination(predicted, ys);
   SelectedLinearModel m;
   m.terms = terms;
   for (std::size_t j = 0; j < terms.size(); ++j) {

@@ -5,9 +5,15 @@
 /// model (scene_trace_model.h). A group is a scene: every fold predicts one scene's rows from a
 /// model fitted on the other scenes'.
 ///
+/// Residuals: (ŷ - y)/√(y·ŷ), the first-order ln(ŷ/y), symmetric in over- and under-prediction
+/// (relative residuals (ŷ - y)/y bound under-prediction by 1 and so bias a fit low when times
+/// spread by factors, as build times do across scenes), by reweighted fits with absolute
+/// residuals (fit.h) and the options' Huber loss, in these units.
+///
 /// Selection: backward elimination as in model_selection.h: start from every candidate term whose
 /// feature is not 0 on every row, drop the optional term whose removal gives the lowest held-out
-/// MAPE while that error does not rise, stop when every removal raises it.
+/// MAPE while that error does not rise, stop when every removal raises it. With too few scenes
+/// to hold out a fit of every term, the required terms alone.
 ///
 /// Interval: q90 = the 90% quantile of |ln(y/ŷ)| over the held-out predictions ŷ of the selected
 /// model; the interval is [ŷ·e^-q, ŷ·e^q], widened outside the fitted range of primitives N to
