@@ -50,25 +50,6 @@ void print_level(const LevelFit& f, const char* title) {
     std::cout << "    scene family " << family << " needs: " << join(terms) << "\n";
 }
 
-/// The build-time models (build_time_model.h), one line per accelerator spec.
-void print_build_models(const BuildTimeModels& models) {
-  if (models.empty()) return;
-  std::cout << "\nbuild-time model, seconds = a·N·log2 N + b·N [+ c], per accelerator spec (held out: leave one "
-               "scene out; 90% interval coverage on held-out scenes):\n";
-  std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>17}\n", "accel", "a (ns)", "b (ns)", "c (ms)",
-                           "MAPE", "cover90", "N fitted");
-  for (const auto& [spec, m] : models) {
-    auto cell = [&](const char* term, double unit) {
-      if (std::find(m.terms.begin(), m.terms.end(), term) == m.terms.end()) return std::string("-");
-      return format_with_error(m.value_of(term) * unit, m.std_error_of(term) * unit);
-    };
-    std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>8.3g}..{:<8.3g}\n", spec,
-                             cell("n_log2_n", 1e9), cell("n", 1e9), cell("one", 1e3),
-                             m.cross_validated ? percent(m.held_out_mape) : "n/a",
-                             m.cross_validated ? percent(m.coverage90) : "n/a", m.range_lo, m.range_hi);
-  }
-}
-
 }  // namespace
 
 int run_sweep_command(const SweepCommand& o) {
@@ -123,6 +104,29 @@ int run_merge_command(const MergeCommand& o) {
                             plan.source, r.files.size(), o.out, merge_record_path(o.out)));
   return 0;
 }
+
+namespace {
+
+/// The build-time models (build_time_model.h), one line per accelerator spec.
+void print_build_models(const BuildTimeModels& models) {
+  if (models.empty()) return;
+  std::cout << "\nbuild-time model, seconds = a·N·log2 N + b·N [+ c], per accelerator spec (held out: leave one "
+               "scene out; 90% interval coverage on held-out scenes):\n";
+  std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>17}\n", "accel", "a (ns)", "b (ns)", "c (ms)",
+                           "MAPE", "cover90", "N fitted");
+  for (const auto& [spec, m] : models) {
+    auto cell = [&](const char* term, double unit) {
+      if (std::find(m.terms.begin(), m.terms.end(), term) == m.terms.end()) return std::string("-");
+      return format_with_error(m.value_of(term) * unit, m.std_error_of(term) * unit);
+    };
+    std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>8.3g}..{:<8.3g}\n", spec,
+                             cell("n_log2_n", 1e9), cell("n", 1e9), cell("one", 1e3),
+                             m.cross_validated ? percent(m.held_out_mape) : "n/a",
+                             m.cross_validated ? percent(m.coverage90) : "n/a", m.range_lo, m.range_hi);
+  }
+}
+
+}  // namespace
 
 int run_fit_command(const FitCommand& o) {
   if (!(o.loss_scale > 0) || !std::isfinite(o.loss_scale))
@@ -230,6 +234,23 @@ int run_predict_command(const PredictCommand& o) {
   j["family"] = family;
   j["predicted_ns_per_ray"] = model.tree.model.predict(features);
   j["extrapolated"] = !outside.empty();
+  if (o.measure) {
+    const std::vector<Ray> rays = make_ray_set(o.rays, scene);
+    const auto embree = make_accelerator("embree", scene);
+    TimingOptions timing;
+    timing.threads = o.threads;
+    timing.min_passes = o.passes;
+    timing.any_hit = is_any_hit_ray_spec(o.rays);
+    const RunRecord measured = measure_case({0, o.scene, o.accel, o.rays}, *scene, built, *embree, rays, timing);
+    j["measured_ns_per_ray"] = measured.ns_per_ray_min;
+    j["measured_ns_per_ray_median"] = measured.ns_per_ray_median;
+    j["passes"] = measured.passes;
+    j["embree_ns_per_ray"] = measured.embree_ns_per_ray_min;
+    j["predicted_from_counters_ns_per_ray"] = model.counters.model.predict(measured);
+    j["nodes_per_ray"] = measured.nodes_per_ray;
+    j["tests_per_ray"] = measured.tests_per_ray;
+  }
+  j["build_s"] = built.build_s;
   // The build-time model of this accelerator spec (build_time_model.h), when the model file has one.
   const double n = scene->total_primitive_count();
   if (const SelectedLinearModel* b = find_spec_model(models.build, o.accel)) {
@@ -240,24 +261,7 @@ int run_predict_command(const PredictCommand& o) {
   } else {
     j["predicted_build_s"] = nullptr;
   }
-  if (o.measure) {
-    const std::vector<Ray> rays = make_ray_set(o.rays, scene);
-    const auto embree = make_accelerator("embree", scene);
-    TimingOptions timing;
-    timing.threads = o.threads;
-    timing.min_passes = o.passes;
-    timing.any_hit = is_any_hit_ray_spec(o.rays);
-    const RunRecord measured = measure_case({0, o.scene, o.accel, o.rays}, *scene, built, *embree, rays, timing);
-    j["measured_ns_per_ray"] = measured.ns_per_ray_min;
-    j["measured_build_s"] = built.build_s;
-    j["measured_ns_per_ray_median"] = measured.ns_per_ray_median;
-    j["passes"] = measured.passes;
-    j["embree_ns_per_ray"] = measured.embree_ns_per_ray_min;
-    j["predicted_from_counters_ns_per_ray"] = model.counters.model.predict(measured);
-    j["nodes_per_ray"] = measured.nodes_per_ray;
-    j["tests_per_ray"] = measured.tests_per_ray;
-  }
-  j["build_s"] = built.build_s;
+  if (o.measure) j["measured_build_s"] = built.build_s;
   if (o.json) {
     std::cout << j.dump() << "\n";
   } else {
