@@ -70,6 +70,7 @@ SelectedLinearModel fit_terms(const std::vector<std::string>& terms, const std::
   // scaled by w_i = 1/√(y_i·ŷ_i) of the previous fit, starting from ŷ = y (relative residuals).
   FitOptions weighted = options;
   weighted.residual = ResidualKind::absolute;
+  weighted.loss_scale = 0;
   std::vector<double> predicted = ys;
   FitResult fit;
   for (int round = 0; round < kReweightingRounds; ++round) {
