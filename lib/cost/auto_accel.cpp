@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
@@ -60,6 +61,15 @@ std::vector<std::string> classes_of(const std::string& rays) {
 /// trace time per ray alone without a count.
 double objective(double build_s, double ns_per_ray, double count) {
   return count > 0 ? build_s + count * ns_per_ray * 1e-9 : ns_per_ray * 1e-9;
+}
+
+/// canonical_accel_spec, or "" for a spec this lab does not know (a model of another version).
+std::string canonical_key(const std::string& spec) {
+  try {
+    return canonical_accel_spec(spec);
+  } catch (const InputError&) {
+    return "";
+  }
 }
 
 /// The fastest of three single-threaded passes over a sample of rays of the choice's kind, in ns
@@ -147,12 +157,20 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   const std::vector<std::string> classes = classes_of(choice.rays);
   std::vector<std::string> families;
   for (const auto& [family, m] : models.families) families.push_back(family);
+  // The model entries by canonical spec (accel_spec_key.h), each spec canonicalised once.
+  std::map<std::string, const SelectedLinearModel*> build_by_key;
+  std::map<std::string, const std::map<std::string, SelectedLinearModel>*> trace_by_key;
+  for (const auto& [spec, m] : models.build) build_by_key.emplace(canonical_key(spec), &m);
+  for (const auto& [spec, m] : models.scene_trace) trace_by_key.emplace(canonical_key(spec), &m);
   std::vector<AutoCandidate> candidates;
   std::vector<std::size_t> ranked;  // predicted candidates, best first
   for (const std::string& spec : auto_candidate_specs(families, model_path)) {
     AutoCandidate c{spec, kNaN, ""};
-    const SelectedLinearModel* build = find_spec_model(models.build, spec);
-    const auto* trace = find_spec_model(models.scene_trace, spec);
+    const std::string key = canonical_key(spec);
+    const auto b_it = build_by_key.find(key);
+    const auto t_it = trace_by_key.find(key);
+    const SelectedLinearModel* build = b_it == build_by_key.end() ? nullptr : b_it->second;
+    const auto* trace = t_it == trace_by_key.end() ? nullptr : t_it->second;
     if (structure_family(spec) == "bsp" && scene->primitive_count() > kAutoBspMaxPrimitives) {
       c.skipped = "more than " + std::to_string(kAutoBspMaxPrimitives) + " primitives";
     } else if (!build) {

@@ -20,15 +20,18 @@ struct SceneFeatures {
   double primitives = 0;     ///< triangles + spheres of the flat geometry
   double triangles = 0;      ///< of the flat geometry
   double total_area = 0;     ///< Σ triangle areas
-  double median_area = 0;    ///< of the non-degenerate triangles (0 when there are none)
+  double median_area = 0;    ///< of the non-degenerate triangles of a sample (kMedianSample); 0 for none
   double max_area = 0;
   double box_area = 0;       ///< surface area of the bounds of the flat geometry
   double crossings = 0;      ///< total_area / box_area (0 for an empty box)
   double area_ratio = 1;     ///< max_area / median_area (1 when undefined)
 };
 
+/// Triangles the median area is taken over: every ⌊N/kMedianSample⌋-th one (all of a smaller scene).
+inline constexpr std::size_t kMedianSample = 8192;
+
 /// The features of `scene`'s flat geometry (instances are not followed: `auto` calls this per
-/// part, on bases and the flat part apart). O(N) time: the median by selection, not sorting.
+/// part, on bases and the flat part apart). One O(N) pass; the median by selection in the sample.
 SceneFeatures scene_features(const Scene& scene);
 
 }  // namespace raylab
