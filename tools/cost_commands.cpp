@@ -114,7 +114,9 @@ void print_build_models(const BuildTimeModels& models) {
                "scene out; 90% interval coverage on held-out scenes):\n";
   std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>17}\n", "accel", "a (ns)", "b (ns)", "c (ms)",
                            "MAPE", "cover90", "N fitted");
-  for (const auto& [spec, m] : models) {
+  for (const auto& entry : models) {
+    const SelectedLinearModel& m = entry.second;  // a plain reference: clang 14 captures no structured binding
+    const std::string& spec = entry.first;
     auto cell = [&](const char* term, double unit) {
       if (std::find(m.terms.begin(), m.terms.end(), term) == m.terms.end()) return std::string("-");
       return format_with_error(m.value_of(term) * unit, m.std_error_of(term) * unit);
