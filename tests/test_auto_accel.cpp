@@ -142,6 +142,24 @@ TEST(AutoAccel, TheChoiceMovesWithTheCountAsItsPredictionsSay) {
   EXPECT_NEAR(b.predicted_trace_s, 1e9 * b.predicted_ns_per_ray * 1e-9, 1e-9 * b.predicted_trace_s);
 }
 
+TEST(AutoAccel, WithoutACountNothingIsTimedAndTheChoiceRepeats) {
+  const auto scene = make_scene("soup:n=2500");
+  const std::string spec = "auto:model=" + tiny_model() + ",rays=diffuse";
+  const auto one = make_accelerator(spec, scene), two = make_accelerator(spec, scene);
+  const AutoChoice &a = choice_of(*one), &b = choice_of(*two);
+  EXPECT_EQ(a.method, "predicted");
+  EXPECT_FALSE(a.sampled);
+  EXPECT_EQ(a.candidates_built, 1u);
+  EXPECT_EQ(a.chosen, b.chosen);
+  EXPECT_EQ(one->structure_hash(), two->structure_hash());
+  // Without a count, the least predicted time per ray wins.
+  for (const AutoCandidate& k : a.candidates) {
+    if (k.skipped.empty()) {
+      EXPECT_GE(k.predicted_ns_per_ray, a.predicted_ns_per_ray) << k.spec;
+    }
+  }
+}
+
 TEST(AutoAccel, InstancedScenesChooseForEachPart) {
   const auto scene = make_scene("instances:of=(sphere:n=800),count=6");
   const auto accel = make_accelerator("auto:model=" + tiny_model() + ",rays=primary,count=5000", scene);

@@ -229,10 +229,10 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   std::size_t best_k = 0, second_k = 0, next = 0;
   while (!best && next < ranked.size()) best = build(best_k = ranked[next++]);
   if (!best) throw InputError("auto: no candidate the cost model " + model_path + " predicts could be built");
-  if (next < ranked.size()) {
+  if (next < ranked.size() && choice.count > 0) {  // without a count the choice stays a pure function of the scene
     second_k = ranked[next];
     const AutoCandidate &b = candidates[best_k], &r = candidates[second_k];
-    const double budget = kAutoSampleBudget * (choice.count > 0 ? b.predicted_total_s : b.predicted_build_s);
+    const double budget = kAutoSampleBudget * b.predicted_total_s;
     if (r.total_lo_s <= b.total_hi_s && r.predicted_build_s <= budget) second = build(second_k);
   }
   if (second) {

@@ -20,8 +20,10 @@
 /// kAutoSampleBudget of the best's predicted total (else a second build costs more than a wrong
 /// pick can): then it builds both, times each on
 /// kAutoSampleRays rays of the kind chosen for (the fastest of 3 passes, one thread), and keeps
-/// the lower measured build + N × trace time (`sampled`). Without `count` the predicted time per
-/// ray alone decides (as for infinitely many rays). A model file without those models gives
+/// the lower measured build + N × trace time (`sampled`; a choice that then depends on timing).
+/// Without `count` the predicted time per ray alone decides (as for infinitely many rays), and
+/// nothing is timed: the choice is a function of the scene and the model (the determinism suite
+/// builds `auto` so). A model file without those models gives
 /// today's behaviour (`method` "built-all"): every candidate built, the tree model's fastest kept.
 #include <limits>
 #include <memory>
@@ -37,8 +39,7 @@ inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
 /// Rays each of the two best candidates is timed on when their intervals overlap (split evenly
 /// over the kinds of `mixed`).
 inline constexpr std::size_t kAutoSampleRays = 384;
-/// The most a second build may cost, as a fraction of the best candidate's predicted total (of its
-/// predicted build without `count=`).
+/// The most a second build may cost, as a fraction of the best candidate's predicted total.
 inline constexpr double kAutoSampleBudget = 0.1;
 
 struct AutoCandidate {
