@@ -1,5 +1,7 @@
 #include "cost/scene_trace_model.h"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -44,23 +46,33 @@ SceneTraceModels fit_scene_trace_models(const std::vector<RunRecord>& runs, cons
   std::map<std::pair<std::string, std::string>, std::vector<const RunRecord*>> groups;
   for (const RunRecord& r : runs)
     if (features[r.scene] && r.ns_per_ray_min > 0) groups[{r.accel, ray_class_of(r.ray_kind)}].push_back(&r);
-  SceneTraceModels models;
-  for (const auto& [key, rows] : groups) {
+  // The (spec, class) fits are independent: fitted in parallel, reported in order.
+  const std::vector<std::pair<std::pair<std::string, std::string>, std::vector<const RunRecord*>>> work(groups.begin(),
+                                                                                                       groups.end());
+  std::vector<std::optional<SelectedLinearModel>> fitted(work.size());
+  std::vector<std::string> failures(work.size());
+  tbb::parallel_for(std::size_t{0}, work.size(), [&](std::size_t g) {
+    const std::vector<const RunRecord*>& rows = work[g].second;
     std::vector<FeatureRow> x;
     std::vector<double> y, primitives;
     std::vector<std::string> scenes;
     for (const RunRecord* r : rows) {
-      x.push_back(scene_trace_features(*features[r->scene]));
+      x.push_back(scene_trace_features(*features.at(r->scene)));
       y.push_back(r->ns_per_ray_min);
       scenes.push_back(r->scene);
       primitives.push_back(static_cast<double>(r->primitives));
     }
     try {
-      models[key.first][key.second] =
-          fit_selected_linear_model(scene_trace_terms(), x, y, scenes, primitives, options);
+      fitted[g] = fit_selected_linear_model(scene_trace_terms(), x, y, scenes, primitives, options);
     } catch (const InputError& e) {
-      if (progress) progress("scene-level model of " + key.first + ", " + key.second + " rays: not fitted (" + e.what() + ")");
+      failures[g] = e.what();
     }
+  });
+  SceneTraceModels models;
+  for (std::size_t g = 0; g < work.size(); ++g) {
+    const auto& [spec, cls] = work[g].first;
+    if (fitted[g]) models[spec][cls] = std::move(*fitted[g]);
+    else if (progress) progress("scene-level model of " + spec + ", " + cls + " rays: not fitted (" + failures[g] + ")");
   }
   return models;
 }
