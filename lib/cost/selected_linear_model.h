@@ -21,7 +21,8 @@
 /// model; the interval is [ŷ·e^-q, ŷ·e^q], widened outside the fitted range of primitives N to
 /// q·(1 + |log2(N/nearest bound)|). Its coverage is measured on data that did not set it: each
 /// scene's held-out rows against the q90 of the other scenes' held-out residuals; `coverage90` is
-/// the fraction inside. Without cross-validation (fewer scenes than terms + 1) only the required
+/// the fraction inside (with one row per scene, (n - 1)/n for n scenes by construction: a
+/// conformal interval). Without cross-validation (fewer scenes than terms + 1) only the required
 /// terms are fitted, q90 comes from the in-sample residuals (scaled by sqrt(n/(n-k))) and the
 /// held-out figures are NaN.
 #include <map>
