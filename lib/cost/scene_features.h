@@ -3,7 +3,7 @@
 /// `auto` predicts each candidate's trace time from before it builds (scene_trace_model.h).
 ///
 /// Besides the counts and the box, the surface-area statistics the structures' costs depend on:
-///  - `crossings` = total triangle area / surface area of the scene box. By Cauchy–Crofton, a
+///  - `crossings` = total triangle area / surface area of the scene box (of its vertices). By Cauchy–Crofton, a
 ///    random line meeting the box crosses on average 2·A/SA(box) surface (Santaló, "Integral
 ///    Geometry and Geometric Probability", 1976): this is half that, the depth complexity of
 ///    the scene seen by a line;
@@ -31,7 +31,8 @@ struct SceneFeatures {
 inline constexpr std::size_t kMedianSample = 8192;
 
 /// The features of `scene`'s flat geometry (instances are not followed: `auto` calls this per
-/// part, on bases and the flat part apart). One O(N) pass; the median by selection in the sample.
+/// part, on bases and the flat part apart). One O(N) pass (single-precision
+/// areas summed in double); the median by selection in the sample.
 SceneFeatures scene_features(const Scene& scene);
 
 }  // namespace raylab
