@@ -197,7 +197,8 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
         c.predicted_total_s = objective(c.predicted_build_s, ns, choice.count);
         c.total_lo_s = objective(b_lo, ns_lo, choice.count);
         c.total_hi_s = objective(b_hi, ns_hi, choice.count);
-        ranked.push_back(candidates.size());
+        if (std::isfinite(c.predicted_total_s)) ranked.push_back(candidates.size());
+        else c.skipped = "the prediction is not a finite number";
       }
     }
     candidates.push_back(std::move(c));
