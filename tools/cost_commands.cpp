@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -11,6 +12,8 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
+#include "cost/accel_spec_key.h"
+#include "cost/build_time_model.h"
 #include "cost/merge.h"
 #include "cost/model_file.h"
 #include "cost/sweep.h"
@@ -128,6 +131,31 @@ int run_merge_command(const MergeCommand& o) {
   return 0;
 }
 
+namespace {
+
+/// The build-time models (build_time_model.h), one line per accelerator spec.
+void print_build_models(const BuildTimeModels& models) {
+  if (models.empty()) return;
+  std::cout << "\nbuild-time model, seconds = a·N·log2 N + b·N [+ c], per accelerator spec (held out: leave one "
+               "scene out; 90% interval coverage on held-out scenes):\n";
+  std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>17}\n", "accel", "a (ns)", "b (ns)", "c (ms)",
+                           "MAPE", "cover90", "N fitted");
+  for (const auto& entry : models) {
+    const SelectedLinearModel& m = entry.second;  // a plain reference: clang 14 captures no structured binding
+    const std::string& spec = entry.first;
+    auto cell = [&](const char* term, double unit) {
+      if (std::find(m.terms.begin(), m.terms.end(), term) == m.terms.end()) return std::string("-");
+      return format_with_error(m.value_of(term) * unit, m.std_error_of(term) * unit);
+    };
+    std::cout << fmt::format("  {:<32} {:>22} {:>22} {:>22} {:>9} {:>9} {:>8.3g}..{:<8.3g}\n", spec,
+                             cell("n_log2_n", 1e9), cell("n", 1e9), cell("one", 1e3),
+                             m.cross_validated ? percent(m.held_out_mape) : "n/a",
+                             m.cross_validated ? percent(m.coverage90) : "n/a", m.range_lo, m.range_hi);
+  }
+}
+
+}  // namespace
+
 int run_fit_command(const FitCommand& o) {
   if (!(o.loss_scale > 0) || !std::isfinite(o.loss_scale))
     throw InputError("--loss-scale: expected a positive number (the Huber scale, as a fraction)");
@@ -172,6 +200,9 @@ int run_fit_command(const FitCommand& o) {
           std::isfinite(m.replicate_error) ? nlohmann::ordered_json(m.replicate_error) : nlohmann::ordered_json(nullptr);
       j["families"][name]["replicate_groups"] = m.replicate_groups;
     }
+    for (const auto& [spec, m] : set.build)
+      j["build"][spec] = {{"terms", m.terms}, {"values", m.values}, {"held_out_mape", m.held_out_mape},
+                          {"coverage90", m.coverage90}};
     std::cout << j.dump() << "\n";
     return 0;
   }
@@ -190,6 +221,7 @@ int run_fit_command(const FitCommand& o) {
                              "model\n",
                              o.out, m.builder.c_trav, m.builder.c_leaf, m.builder.c_isect, m.builder_source);
   }
+  print_build_models(set.build);
   std::cout << "\nwrote " << o.out << "\n";
   return 0;
 }
@@ -263,6 +295,17 @@ int run_predict_command(const PredictCommand& o) {
     j["tests_per_ray"] = measured.tests_per_ray;
   }
   j["build_s"] = built.build_s;
+  // The build-time model of this accelerator spec (build_time_model.h), when the model file has one.
+  const double n = scene->total_primitive_count();
+  if (const SelectedLinearModel* b = find_spec_model(models.build, o.accel)) {
+    const FeatureRow f = build_time_features(n);
+    const auto [lo, hi] = b->interval90(f, n);
+    j["predicted_build_s"] = b->predict(f);
+    j["interval90_build_s"] = {lo, hi};
+  } else {
+    j["predicted_build_s"] = nullptr;
+  }
+  if (o.measure) j["measured_build_s"] = built.build_s;
   if (o.json) {
     std::cout << j.dump() << "\n";
   } else {

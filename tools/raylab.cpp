@@ -208,7 +208,12 @@ int run_trace(const TraceCommand& o) {
 
   double build_s = 0;
   const std::size_t rss_before = peak_rss_bytes();
-  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene); }, &build_s);
+  // `auto` weighs build time against the trace of the rays that follow: without its own count=, it
+  // is handed the count of this ray set.
+  std::string accel_spec = o.accel;
+  if (const SpecString s = parse_spec(o.accel); s.name == "auto" && !SpecReader(s).has("count"))
+    accel_spec += (s.params.empty() && s.positional.empty() ? ":count=" : ",count=") + std::to_string(rays.size());
+  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(accel_spec, scene); }, &build_s);
   TraceOptions topt{o.threads, false, any_hit};
   const TraceResult timed = timed_step("tracing", [&] { return trace_rays(*accel, rays, topt); });
   RayCounters counters;
@@ -250,6 +255,14 @@ int run_trace(const TraceCommand& o) {
       nlohmann::ordered_json e = {{"spec", k.spec}};
       if (k.skipped.empty()) e["predicted_ns_per_ray"] = k.predicted_ns_per_ray;
       else e["skipped"] = k.skipped;
+      if (std::isfinite(k.predicted_total_s)) {
+        e["predicted_build_s"] = k.predicted_build_s;
+        e["predicted_total_s"] = k.predicted_total_s;
+        e["interval90_total_s"] = {k.total_lo_s, k.total_hi_s};
+      }
+      e["built"] = k.built;
+      if (std::isfinite(k.measured_build_s)) e["measured_build_s"] = k.measured_build_s;
+      if (std::isfinite(k.measured_ns_per_ray)) e["sampled_ns_per_ray"] = k.measured_ns_per_ray;
       candidates.push_back(e);
     }
     j["auto_choice"] = {{"chosen", c.chosen},
@@ -257,6 +270,18 @@ int run_trace(const TraceCommand& o) {
                         {"rays", c.rays},
                         {"model", c.model},
                         {"candidates", candidates}};
+    auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
+    j["auto_method"] = c.method;
+    j["auto_count"] = c.count;
+    j["auto_choose_s"] = c.choose_s;
+    j["auto_predicted_build_s"] = number_or_null(c.predicted_build_s);
+    j["auto_predicted_trace_s"] = number_or_null(c.predicted_trace_s);
+    j["auto_runner_up"] = c.runner_up.empty() ? nlohmann::ordered_json()
+                                              : nlohmann::ordered_json{{"spec", c.runner_up},
+                                                                       {"predicted_total_s", number_or_null(c.runner_up_total_s)}};
+    j["auto_candidates_built"] = c.candidates_built;
+    j["auto_sampled"] = c.sampled;
+    if (!c.note.empty()) j["auto_note"] = c.note;
   }
   j["build_rss_growth_bytes"] = peak_rss_bytes() - rss_before;
 

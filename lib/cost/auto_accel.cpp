@@ -1,11 +1,19 @@
 #include "cost/auto_accel.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
+#include "cost/accel_spec_key.h"
+#include "cost/build_time_model.h"
 #include "cost/model_file.h"
+#include "cost/scene_features.h"
+#include "cost/scene_trace_model.h"
 #include "cost/tree_features.h"
 #include "geometry/input_error.h"
 
@@ -19,7 +27,65 @@ const std::vector<std::string> kMixedKinds = {"primary", "diffuse", "shadow"};
 std::vector<ParamDoc> auto_params() {
   return {{"model", "default", "the cost model (raylab fit): a model.json path, or 'default' for the lab's committed model"},
           {"rays", "mixed", "the ray kind to choose for: primary | diffuse | shadow | lines | ao | mixed (mean of "
-                            "primary, diffuse and shadow)"}};
+                            "primary, diffuse and shadow)"},
+          {"count", "the rays traced", "the number of rays the structure will trace: the choice minimises predicted "
+                                       "build + count x trace time (raylab trace passes its own count)"}};
+}
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+/// `count=`: a positive whole number of rays (1e9 allowed); 0 when not given.
+double parse_count(SpecReader& r) {
+  if (!r.has("count")) return 0.0;
+  const std::string text = r.get_string("count", "");
+  double v = 0;
+  if (!parse_double(text, v) || !std::isfinite(v) || v < 1 || v != std::floor(v) || v > 1e18)
+    throw InputError("auto: count=" + text +
+                     ": expected a positive whole number of rays (the form: auto:rays=KIND,count=N[,model=PATH], e.g. "
+                     "auto:rays=diffuse,count=1e6)");
+  return v;
+}
+
+/// The ray classes (run_record.h: ray_class_of) a choice for `rays` averages over.
+std::vector<std::string> classes_of(const std::string& rays) {
+  if (rays != "mixed") return {ray_class_of(rays)};
+  std::vector<std::string> out;
+  for (const std::string& kind : kMixedKinds) out.push_back(ray_class_of(kind));
+  return out;
+}
+
+/// What a choice minimises: predicted (or measured) build + count × trace seconds, or the
+/// trace time per ray alone without a count.
+double objective(double build_s, double ns_per_ray, double count) {
+  return count > 0 ? build_s + count * ns_per_ray * 1e-9 : ns_per_ray * 1e-9;
+}
+
+/// canonical_accel_spec, or "" for a spec this lab does not know (a model of another version).
+std::string canonical_key(const std::string& spec) {
+  try {
+    return canonical_accel_spec(spec);
+  } catch (const InputError&) {
+    return "";
+  }
+}
+
+/// The fastest of three single-threaded passes over a sample of rays of the choice's kind, in ns
+/// per ray (mean over the kinds of `mixed`).
+double sampled_ns_per_ray(const Aggregate& accel, const std::shared_ptr<const Scene>& scene, const std::string& rays) {
+  const std::vector<std::string> kinds = rays == "mixed" ? kMixedKinds : std::vector<std::string>{rays};
+  double sum = 0;
+  for (const std::string& kind : kinds) {
+    const std::string spec = kind + ":" + std::to_string(kAutoSampleRays / kinds.size());
+    const std::vector<Ray> sample = make_ray_set(spec, scene);
+    double best = std::numeric_limits<double>::infinity();
+    for (int pass = 0; pass < 3; ++pass)
+      best = std::min(best, trace_rays(accel, sample, TraceOptions{1, false, is_any_hit_ray_spec(spec)}).seconds);
+    sum += best / static_cast<double>(std::max<std::size_t>(sample.size(), 1)) * 1e9;
+  }
+  return sum / static_cast<double>(kinds.size());
 }
 
 double predict_ns(const FamilyModel& model, const TreeFeatures& f, const std::string& rays, double primitives) {
@@ -29,9 +95,12 @@ double predict_ns(const FamilyModel& model, const TreeFeatures& f, const std::st
   return sum / static_cast<double>(kMixedKinds.size());
 }
 
-/// Chooses among the candidates on a flat scene and returns the chosen structure.
-std::unique_ptr<Aggregate> choose(const std::shared_ptr<const Scene>& scene, const CostModelSet& models,
-                                  const std::string& model_path, AutoChoice& choice) {
+/// Chooses among the candidates on a flat scene by building every one and predicting each from
+/// its tree (the model file has no build-time or scene-level models).
+std::unique_ptr<Aggregate> choose_built_all(const std::shared_ptr<const Scene>& scene, const CostModelSet& models,
+                                            const std::string& model_path, AutoChoice& choice) {
+  const auto start = Clock::now();
+  choice.method = "built-all";
   std::vector<std::string> families;
   for (const auto& [family, m] : models.families) families.push_back(family);
   std::unique_ptr<Aggregate> best;
@@ -52,6 +121,8 @@ std::unique_ptr<Aggregate> choose(const std::shared_ptr<const Scene>& scene, con
       choice.candidates.push_back(c);
       continue;
     }
+    ++choice.candidates_built;
+    c.built = true;
     const TreeFeatures f = tree_features(*accel, *scene);
     c.predicted_ns_per_ray = predict_ns(models.family(family), f, choice.rays, scene->total_primitive_count());
     choice.candidates.push_back(c);
@@ -63,12 +134,160 @@ std::unique_ptr<Aggregate> choose(const std::shared_ptr<const Scene>& scene, con
     }
   }
   if (!best) throw InputError("auto: the cost model " + model_path + " ranks none of the lab's structures");
+  double second = std::numeric_limits<double>::infinity();
+  for (const AutoCandidate& c : choice.candidates)
+    if (c.skipped.empty() && c.spec != choice.chosen && c.predicted_ns_per_ray < second) {
+      second = c.predicted_ns_per_ray;
+      choice.runner_up = c.spec;
+      choice.runner_up_total_s = choice.count > 0 ? choice.count * second * 1e-9 : kNaN;
+    }
+  if (choice.count > 0) choice.predicted_trace_s = choice.count * choice.predicted_ns_per_ray * 1e-9;
+  choice.choose_s = seconds_since(start);
   return best;
+}
+
+/// Chooses on a flat scene from its features alone, then builds what it chose (and the runner-up
+/// when their intervals overlap); nullptr when the model predicts no candidate.
+std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& scene, const CostModelSet& models,
+                                            const std::string& model_path, AutoChoice& choice) {
+  const auto start = Clock::now();
+  const SceneFeatures sf = scene_features(*scene);
+  const FeatureRow trace_x = scene_trace_features(sf);
+  const FeatureRow build_x = build_time_features(sf.primitives);
+  const std::vector<std::string> classes = classes_of(choice.rays);
+  std::vector<std::string> families;
+  for (const auto& [family, m] : models.families) families.push_back(family);
+  // The model entries by canonical spec (accel_spec_key.h), each spec canonicalised once.
+  std::map<std::string, const SelectedLinearModel*> build_by_key;
+  std::map<std::string, const std::map<std::string, SelectedLinearModel>*> trace_by_key;
+  for (const auto& [spec, m] : models.build) build_by_key.emplace(canonical_key(spec), &m);
+  for (const auto& [spec, m] : models.scene_trace) trace_by_key.emplace(canonical_key(spec), &m);
+  std::vector<AutoCandidate> candidates;
+  std::vector<std::size_t> ranked;  // predicted candidates, best first
+  for (const std::string& spec : auto_candidate_specs(families, model_path)) {
+    AutoCandidate c{spec, kNaN, ""};
+    const std::string key = canonical_key(spec);
+    const auto b_it = build_by_key.find(key);
+    const auto t_it = trace_by_key.find(key);
+    const SelectedLinearModel* build = b_it == build_by_key.end() ? nullptr : b_it->second;
+    const auto* trace = t_it == trace_by_key.end() ? nullptr : t_it->second;
+    if (structure_family(spec) == "bsp" && scene->primitive_count() > kAutoBspMaxPrimitives) {
+      c.skipped = "more than " + std::to_string(kAutoBspMaxPrimitives) + " primitives";
+    } else if (!build) {
+      c.skipped = "the model has no build-time model of this spec";
+    } else if (!trace) {
+      c.skipped = "the model has no scene-level trace model of this spec";
+    } else {
+      double ns = 0, ns_lo = 0, ns_hi = 0;
+      for (const std::string& cls : classes) {
+        const auto it = trace->find(cls);
+        if (it == trace->end()) {
+          c.skipped = "the model has no scene-level trace model of this spec for " + cls + " rays";
+          break;
+        }
+        const auto [lo, hi] = it->second.interval90(trace_x, sf.primitives);
+        ns += it->second.predict(trace_x) / static_cast<double>(classes.size());
+        ns_lo += lo / static_cast<double>(classes.size());
+        ns_hi += hi / static_cast<double>(classes.size());
+      }
+      if (c.skipped.empty()) {
+        const auto [b_lo, b_hi] = build->interval90(build_x, sf.primitives);
+        c.predicted_ns_per_ray = ns;
+        c.predicted_build_s = build->predict(build_x);
+        c.predicted_total_s = objective(c.predicted_build_s, ns, choice.count);
+        c.total_lo_s = objective(b_lo, ns_lo, choice.count);
+        c.total_hi_s = objective(b_hi, ns_hi, choice.count);
+        if (std::isfinite(c.predicted_total_s)) ranked.push_back(candidates.size());
+        else c.skipped = "the prediction is not a finite number";
+      }
+    }
+    candidates.push_back(std::move(c));
+  }
+  if (ranked.empty()) return nullptr;
+  std::stable_sort(ranked.begin(), ranked.end(), [&](std::size_t a, std::size_t b) {
+    return candidates[a].predicted_total_s < candidates[b].predicted_total_s;
+  });
+  choice.method = "predicted";
+  choice.choose_s = seconds_since(start);
+
+  // Build the best (the next one when a builder refuses the spec), and the runner-up too when
+  // their 90% intervals overlap.
+  auto build = [&](std::size_t k) -> std::unique_ptr<Aggregate> {
+    AutoCandidate& c = candidates[k];
+    const auto t = Clock::now();
+    try {
+      auto accel = make_accelerator(c.spec, scene);
+      c.measured_build_s = seconds_since(t);
+      c.built = true;
+      ++choice.candidates_built;
+      return accel;
+    } catch (const InputError& e) {  // e.g. a model whose constants a builder cannot use
+      c.skipped = e.what();
+      return nullptr;
+    }
+  };
+  std::unique_ptr<Aggregate> best, second;
+  std::size_t best_k = 0, second_k = 0, next = 0;
+  while (!best && next < ranked.size()) best = build(best_k = ranked[next++]);
+  if (!best) throw InputError("auto: no candidate the cost model " + model_path + " predicts could be built");
+  if (next < ranked.size() && choice.count > 0) {  // without a count the choice stays a pure function of the scene
+    second_k = ranked[next];
+    const AutoCandidate &b = candidates[best_k], &r = candidates[second_k];
+    const double budget = kAutoSampleBudget * b.predicted_total_s;
+    if (r.total_lo_s <= b.total_hi_s && r.predicted_build_s <= budget) second = build(second_k);
+  }
+  if (second) {
+    choice.sampled = true;
+    for (const std::size_t k : {best_k, second_k}) {
+      const Aggregate& a = k == best_k ? *best : *second;
+      candidates[k].measured_ns_per_ray = sampled_ns_per_ray(a, scene, choice.rays);
+    }
+    auto measured = [&](std::size_t k) {
+      return objective(candidates[k].measured_build_s, candidates[k].measured_ns_per_ray, choice.count);
+    };
+    choice.note = "the 90% intervals of " + candidates[best_k].spec + " and " + candidates[second_k].spec +
+                  " overlapped: both built and timed on " + std::to_string(kAutoSampleRays) +
+                  " rays, the lower measured total kept";
+    if (measured(second_k) < measured(best_k)) {
+      std::swap(best, second);
+      std::swap(best_k, second_k);
+    }
+  }
+  const AutoCandidate& chosen = candidates[best_k];
+  choice.chosen = chosen.spec;
+  choice.predicted_ns_per_ray = chosen.predicted_ns_per_ray;
+  choice.predicted_build_s = chosen.predicted_build_s;
+  if (choice.count > 0) choice.predicted_trace_s = choice.count * chosen.predicted_ns_per_ray * 1e-9;
+  const std::size_t runner = ranked.front() == best_k ? (ranked.size() > 1 ? ranked[1] : best_k) : ranked.front();
+  if (runner != best_k) {
+    choice.runner_up = candidates[runner].spec;
+    choice.runner_up_total_s = candidates[runner].predicted_total_s;
+  }
+  choice.candidates = std::move(candidates);
+  return best;
+}
+
+/// Chooses among the candidates on a flat scene and returns the chosen structure.
+std::unique_ptr<Aggregate> choose(const std::shared_ptr<const Scene>& scene, const CostModelSet& models,
+                                  const std::string& model_path, AutoChoice& choice) {
+  if (!models.build.empty() && !models.scene_trace.empty()) {
+    AutoChoice predicted = choice;
+    if (auto chosen = choose_predicted(scene, models, model_path, predicted)) {
+      choice = std::move(predicted);
+      return chosen;
+    }
+    choice.note = "the model's build-time and scene-level models predict none of the candidates: every candidate built";
+  } else {
+    choice.note = "the model file has no build-time or scene-level models (raylab fit writes them): every candidate "
+                  "built";
+  }
+  return choose_built_all(scene, models, model_path, choice);
 }
 
 std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecReader& r) {
   const std::string model_path = r.get_string("model", "default");
   AutoChoice choice;
+  choice.count = parse_count(r);
   choice.rays = r.get_choice("rays", "mixed", kRayKinds);
   choice.model = resolve_model_path(model_path);
   const CostModelSet models = read_model_file(model_path);
@@ -78,17 +297,22 @@ std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecRea
   }
   // Instances: choose for each base (placed under its instances) and for the flat geometry apart;
   // the choice reported is the one for the part with the most primitives.
-  double largest = -1.0;
+  double largest = -1.0, choose_s = 0;
+  std::size_t built = 0;
   const AutoChoice blank = choice;
   auto top = make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> part) {
     AutoChoice part_choice = blank;
     auto chosen = choose(part, models, model_path, part_choice);
+    choose_s += part_choice.choose_s;
+    built += part_choice.candidates_built;
     if (part->total_primitive_count() > largest) {
       largest = part->total_primitive_count();
       choice = std::move(part_choice);
     }
     return chosen;
   });
+  choice.choose_s = choose_s;
+  choice.candidates_built = built;
   return std::make_unique<AutoAccelerator>(std::move(top), std::move(choice));
 }
 
@@ -100,6 +324,7 @@ AccelKind make_auto_kind() {
           [](SpecReader& r) -> AccuracyBound {
             // The loosest bound of the candidates: every one of them may be chosen.
             r.get_choice("rays", "mixed", kRayKinds);
+            parse_count(r);
             const std::string model = r.get_string("model", "default");
             const CostModelSet models = read_model_file(model);
             std::vector<std::string> families;

@@ -1,5 +1,5 @@
 #pragma once
-/// `auto[:model=PATH,rays=KIND]`: the accelerator a fitted cost model picks for the scene it is
+/// `auto[:model=PATH,rays=KIND,count=N]`: the accelerator a fitted cost model picks for the scene it is
 /// given. Every candidate structure (the lab's own: BVH of each width, kd-tree, octree, BSP tree,
 /// uniform and nested grids, with the parameter variants the model can rank, including trees
 /// built from the model itself, `cost=`) whose family the model covers is built, its features
@@ -10,6 +10,22 @@
 /// committed default model (model_file.h) is used, and the choice says so. On an instanced
 /// scene the choice is made for each base and for the flat geometry apart (placed as
 /// make_instanced_aggregate places them); the choice reported is the largest part's.
+///
+/// With `count=N` and a model file that has build-time and scene-level models (build_time_model.h,
+/// scene_trace_model.h), `auto` chooses BEFORE it builds (`method` "predicted"): from the scene's
+/// features alone (scene_features.h, one O(N) pass) it predicts each candidate's build seconds and
+/// its ns per ray, and keeps the candidate of least predicted build + N × trace time; candidates
+/// the model has no entry for (by accel_spec_key.h) are skipped. It builds only that one, unless
+/// the 90% intervals of the best two totals overlap and the runner-up's predicted build is at most
+/// kAutoSampleBudget of the best's predicted total (else a second build costs more than a wrong
+/// pick can): then it builds both, times each on
+/// kAutoSampleRays rays of the kind chosen for (the fastest of 3 passes, one thread), and keeps
+/// the lower measured build + N × trace time (`sampled`; a choice that then depends on timing).
+/// Without `count` the predicted time per ray alone decides (as for infinitely many rays), and
+/// nothing is timed: the choice is a function of the scene and the model (the determinism suite
+/// builds `auto` so). A model file without those models gives
+/// today's behaviour (`method` "built-all"): every candidate built, the tree model's fastest kept.
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,11 +36,24 @@
 namespace raylab {
 
 inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
+/// Rays each of the two best candidates is timed on when their intervals overlap (split evenly
+/// over the kinds of `mixed`).
+inline constexpr std::size_t kAutoSampleRays = 384;
+/// The most a second build may cost, as a fraction of the best candidate's predicted total.
+inline constexpr double kAutoSampleBudget = 0.1;
 
 struct AutoCandidate {
   std::string spec;
   double predicted_ns_per_ray = 0.0;  ///< NaN when skipped
   std::string skipped;                ///< why, when skipped
+  // method "predicted" only (NaN otherwise):
+  double predicted_build_s = std::numeric_limits<double>::quiet_NaN();
+  double predicted_total_s = std::numeric_limits<double>::quiet_NaN();  ///< build + count × trace
+  double total_lo_s = std::numeric_limits<double>::quiet_NaN();  ///< its 90% interval
+  double total_hi_s = std::numeric_limits<double>::quiet_NaN();
+  bool built = false;
+  double measured_build_s = std::numeric_limits<double>::quiet_NaN();     ///< when built
+  double measured_ns_per_ray = std::numeric_limits<double>::quiet_NaN();  ///< when timed on the sample
 };
 
 struct AutoChoice {
@@ -33,6 +62,19 @@ struct AutoChoice {
   std::string chosen;
   double predicted_ns_per_ray = 0.0;
   std::vector<AutoCandidate> candidates;
+  std::string method;  ///< "predicted" (chosen before building) or "built-all" (every candidate built)
+  std::string note;    ///< why built-all, or that both of two overlapping candidates were built
+  double count = 0;    ///< the rays chosen for (`count=`); 0 when not given
+  /// Seconds from the scene to the choice: the feature pass and the predictions ("predicted"),
+  /// or building and reading every candidate ("built-all"). Summed over the parts of an
+  /// instanced scene, as are candidates_built.
+  double choose_s = 0;
+  double predicted_build_s = std::numeric_limits<double>::quiet_NaN();
+  double predicted_trace_s = std::numeric_limits<double>::quiet_NaN();  ///< count × ns per ray; NaN without count
+  std::string runner_up;  ///< the second-best candidate, empty when there is none
+  double runner_up_total_s = std::numeric_limits<double>::quiet_NaN();  ///< its predicted total (or ns per ray × count)
+  std::size_t candidates_built = 0;
+  bool sampled = false;  ///< the best two overlapped: both built and timed on kAutoSampleRays rays
 };
 
 /// The candidate specs for a model whose families are `families` (model path spliced into the

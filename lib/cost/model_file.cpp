@@ -219,7 +219,7 @@ void write_model_file(const CostModelSet& set, const std::string& path) {
                       {"replicate_error", number_or_null(m.replicate_error)},
                       {"replicate_groups", m.replicate_groups}};
   }
-  const Json j = {{"format", kFormat},
+  Json j = {{"format", kFormat},
                   {"version", CostModelSet::kVersion},
                   {"created", set.created},
                   {"data",
@@ -235,6 +235,8 @@ void write_model_file(const CostModelSet& set, const std::string& path) {
                     {"loss_scale", set.options.loss_scale},
                     {"nonnegative", set.options.nonnegative}}},
                   {"families", families}};
+  if (!set.build.empty()) j["build"] = build_time_models_json(set.build);
+  if (!set.scene_trace.empty()) j["scene_trace"] = scene_trace_models_json(set.scene_trace);
   write_file_atomically(path, j.dump(2) + "\n");
 }
 
@@ -303,6 +305,8 @@ CostModelSet read_model_file(const std::string& path_in) {
     }
     set.families[m.family] = std::move(m);
   }
+  if (j.contains("build")) set.build = read_build_time_models(j.at("build"), path + ".build");
+  if (j.contains("scene_trace")) set.scene_trace = read_scene_trace_models(j.at("scene_trace"), path + ".scene_trace");
   return set;
 }
 

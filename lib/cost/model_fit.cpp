@@ -282,6 +282,9 @@ CostModelSet fit_cost_model_set(const std::vector<RunRecord>& measured, const Fi
     }
     set.families[name] = std::move(m);
   }
+  if (progress) progress("fitting the build-time and scene-level models");
+  set.build = fit_build_time_models(measured, options, progress);
+  set.scene_trace = fit_scene_trace_models(runs, options, progress);
   return set;
 }
 

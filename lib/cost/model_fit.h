@@ -28,10 +28,12 @@
 #include <vector>
 
 #include "accel/common/fitted_cost.h"
+#include "cost/build_time_model.h"
 #include "cost/cost_model.h"
 #include "cost/fit.h"
 #include "cost/model_selection.h"
 #include "cost/run_record.h"
+#include "cost/scene_trace_model.h"
 
 namespace raylab {
 
@@ -161,6 +163,11 @@ struct CostModelSet {
   FitOptions options;
   FitTarget target = FitTarget::embree_normalized;
   std::map<std::string, FamilyModel> families;
+  /// Build seconds per accelerator spec (build_time_model.h) and ns per ray per spec and ray
+  /// class from scene features alone (scene_trace_model.h): what `auto` chooses with before it
+  /// builds. Empty in model files written without them (auto then builds every candidate).
+  BuildTimeModels build;
+  SceneTraceModels scene_trace;
 
   /// The model of `family`; throws InputError listing the families the model has.
   const FamilyModel& family(const std::string& name) const;

@@ -1,0 +1,58 @@
+#include "cost/scene_features.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace raylab {
+
+namespace {
+
+double triangle_area(const TriangleMesh& mesh, std::size_t t) {
+  const Vec3f a = mesh.vertex(t, 0);
+  return 0.5 * static_cast<double>(length(cross(mesh.vertex(t, 1) - a, mesh.vertex(t, 2) - a)));
+}
+
+/// Σ area, largest area and the box of a range of triangles.
+struct AreaPass {
+  double total = 0, largest = 0;
+  Bounds3f box;
+};
+
+}  // namespace
+
+SceneFeatures scene_features(const Scene& scene) {
+  SceneFeatures f;
+  f.primitives = static_cast<double>(scene.primitive_count());
+  f.triangles = static_cast<double>(scene.triangle_count());
+  const TriangleMesh& mesh = scene.mesh;
+  const std::size_t n = mesh.size();
+  AreaPass pass;
+  for (std::size_t t = 0; t < n; ++t) {
+    const double area = triangle_area(mesh, t);
+    pass.total += area;
+    pass.largest = std::max(pass.largest, area);
+  }
+  for (const Vec3f& v : mesh.vertices) pass.box.extend(v);  // TriangleMesh::bounds: holds every triangle
+  f.total_area = pass.total;
+  f.max_area = pass.largest;
+  Bounds3f box = pass.box;
+  // The median over every stride-th triangle.
+  const std::size_t stride = std::max<std::size_t>(1, n / kMedianSample);
+  std::vector<double> sample;
+  sample.reserve(n / stride + 1);
+  for (std::size_t t = 0; t < n; t += stride)
+    if (const double area = triangle_area(mesh, t); area > 0) sample.push_back(area);
+  if (!sample.empty()) {
+    const auto mid = sample.begin() + static_cast<std::ptrdiff_t>(sample.size() / 2);
+    std::nth_element(sample.begin(), mid, sample.end());
+    f.median_area = *mid;
+    f.area_ratio = f.max_area / f.median_area;
+  }
+  for (std::size_t s = 0; s < scene.spheres.size(); ++s)
+    box.extend(scene.primitive_bounds(static_cast<unsigned>(n + s)));
+  if (scene.primitive_count() > 0) f.box_area = static_cast<double>(box.surface_area());
+  if (f.box_area > 0) f.crossings = f.total_area / f.box_area;
+  return f;
+}
+
+}  // namespace raylab

@@ -1,0 +1,38 @@
+#pragma once
+/// Features of a scene alone, from one O(N) pass over its triangles (no structure built): what
+/// `auto` predicts each candidate's trace time from before it builds (scene_trace_model.h).
+///
+/// Besides the counts and the box, the surface-area statistics the structures' costs depend on:
+///  - `crossings` = total triangle area / surface area of the scene box (of its vertices). By Cauchy–Crofton, a
+///    random line meeting the box crosses on average 2·A/SA(box) surface (Santaló, "Integral
+///    Geometry and Geometric Probability", 1976): this is half that, the depth complexity of
+///    the scene seen by a line;
+///  - `area_ratio` = largest / median triangle area: ≈ 1 for a uniform mesh, ≫ 1 for a
+///    teapot in a stadium (Havran's "teapot in a stadium", the case uniform grids lose);
+/// Spheres count in `primitives` but not in the area statistics (triangles only).
+#include <cstddef>
+
+#include "scene/scene.h"
+
+namespace raylab {
+
+struct SceneFeatures {
+  double primitives = 0;     ///< triangles + spheres of the flat geometry
+  double triangles = 0;      ///< of the flat geometry
+  double total_area = 0;     ///< Σ triangle areas
+  double median_area = 0;    ///< of the non-degenerate triangles of a sample (kMedianSample); 0 for none
+  double max_area = 0;
+  double box_area = 0;       ///< surface area of the bounds of the flat geometry
+  double crossings = 0;      ///< total_area / box_area (0 for an empty box)
+  double area_ratio = 1;     ///< max_area / median_area (1 when undefined)
+};
+
+/// Triangles the median area is taken over: every ⌊N/kMedianSample⌋-th one (all of a smaller scene).
+inline constexpr std::size_t kMedianSample = 8192;
+
+/// The features of `scene`'s flat geometry (instances are not followed: `auto` calls this per
+/// part, on bases and the flat part apart). One O(N) pass (single-precision
+/// areas summed in double); the median by selection in the sample.
+SceneFeatures scene_features(const Scene& scene);
+
+}  // namespace raylab

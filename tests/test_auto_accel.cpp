@@ -1,0 +1,235 @@
+// `auto` that chooses before it builds (auto_accel.h): on a model fitted from a tiny sweep of this
+// machine, it builds only what it chose (counted), its choice minimises the predicted build +
+// count × trace time, and moves with the count; without build-time models it builds every
+// candidate; a bad count is one error line.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/hit_comparison.h"
+#include "accel/common/ray_sets.h"
+#include "accel/common/tracer.h"
+#include "cost/auto_accel.h"
+#include "cost/model_file.h"
+#include "cost/sweep.h"
+#include "geometry/input_error.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch_dir() {
+  const auto dir = fs::temp_directory_path() / ("raylab_auto_accel_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+/// Four scenes of 300 to 6k triangles, three structures, two ray kinds: 24 cases, a few seconds.
+constexpr const char* kTinyPlan = R"({
+  "description": "test_auto_accel: a tiny sweep for the build-time and scene-level models",
+  "scenes": ["soup:n=300", "sphere:n=1500", "walls:n=60,angle=30", "soup:n=6000"],
+  "accels": ["bvh", "grid:d=1", "kdtree"],
+  "rays": ["primary:256", "diffuse:256"]
+})";
+
+/// The model fitted on the tiny sweep, once per process.
+const std::string& tiny_model() {
+  static const std::string path = [] {
+    const fs::path dir = scratch_dir();
+    std::ofstream(dir / "plan.json") << kTinyPlan;
+    SweepOptions options;
+    options.out = (dir / "runs.csv").string();
+    fs::remove(options.out);
+    run_sweep(load_plan((dir / "plan.json").string()), options);
+    CostModelSet set = fit_cost_model_set(read_runs_csv(options.out), FitOptions{});
+    set.runs_source = options.out;
+    const std::string model = (dir / "model.json").string();
+    write_model_file(set, model);
+    return model;
+  }();
+  return path;
+}
+
+const AutoChoice& choice_of(const Aggregate& a) {
+  const auto* chooser = dynamic_cast<const AutoAccelerator*>(&a);
+  if (!chooser) throw std::runtime_error("not an auto accelerator");
+  return chooser->choice();
+}
+
+std::size_t built_count(const AutoChoice& c) {
+  std::size_t n = 0;
+  for (const AutoCandidate& k : c.candidates) n += k.built;
+  return n;
+}
+
+/// The chosen candidate minimises the predicted total over the predicted candidates, unless the
+/// best two overlapped and were timed (then it is one of those two).
+void expect_minimises_prediction(const AutoChoice& c) {
+  const AutoCandidate* best = nullptr;
+  for (const AutoCandidate& k : c.candidates)
+    if (k.skipped.empty() && (!best || k.predicted_total_s < best->predicted_total_s)) best = &k;
+  ASSERT_NE(best, nullptr);
+  if (!c.sampled) {
+    EXPECT_EQ(c.chosen, best->spec);
+  } else {
+    EXPECT_TRUE(c.chosen == best->spec || c.chosen == c.runner_up || best->spec == c.runner_up) << c.chosen;
+  }
+}
+
+TEST(AutoAccel, ModelFileHasTheBuildAndSceneLevelModels) {
+  const CostModelSet set = read_model_file(tiny_model());
+  for (const char* spec : {"bvh", "grid:d=1", "kdtree"}) {
+    ASSERT_EQ(set.build.count(spec), 1u) << spec;
+    EXPECT_EQ(set.build.at(spec).rows, 4u) << spec;
+    EXPECT_TRUE(set.build.at(spec).cross_validated) << spec;
+    ASSERT_EQ(set.scene_trace.count(spec), 1u) << spec;
+    EXPECT_EQ(set.scene_trace.at(spec).count("camera"), 1u) << spec;
+    EXPECT_EQ(set.scene_trace.at(spec).count("bounce"), 1u) << spec;
+    EXPECT_EQ(set.scene_trace.at(spec).count("occlusion"), 0u) << spec;  // no shadow rays in the plan
+  }
+}
+
+TEST(AutoAccel, ChoosesBeforeBuildingAndBuildsOnlyWhatItChose) {
+  const auto scene = make_scene("soup:n=3000");
+  const auto accel = make_accelerator("auto:model=" + tiny_model() + ",rays=diffuse,count=10000", scene);
+  const AutoChoice& c = choice_of(*accel);
+  EXPECT_EQ(c.method, "predicted");
+  EXPECT_EQ(c.count, 10000.0);
+  EXPECT_EQ(c.candidates_built, c.sampled ? 2u : 1u);
+  EXPECT_EQ(built_count(c), c.candidates_built);
+  expect_minimises_prediction(c);
+  EXPECT_GT(c.choose_s, 0.0);
+  EXPECT_TRUE(std::isfinite(c.predicted_build_s));
+  bool any_skipped = false;
+  for (const AutoCandidate& k : c.candidates) {
+    if (k.spec == c.chosen) {
+      EXPECT_TRUE(k.built);
+    }
+    any_skipped |= !k.skipped.empty();
+  }
+  EXPECT_TRUE(any_skipped);  // the candidates the tiny model has no entry for (bvh:width=2, octree, ...)
+  EXPECT_FALSE(c.runner_up.empty());
+  // What it built traces correctly.
+  const std::vector<Ray> rays = make_ray_set("diffuse:512", scene);
+  const auto reference = make_accelerator("bvh", scene);
+  const TraceResult got = trace_rays(*accel, rays, {1});
+  const TraceResult ref = trace_rays(*reference, rays, {1});
+  EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, length(Vec3d(scene->bounds().diagonal()))).mismatches, 0u);
+}
+
+TEST(AutoAccel, TheChoiceMovesWithTheCountAsItsPredictionsSay) {
+  const auto scene = make_scene("sphere:n=4000");
+  const auto few = make_accelerator("auto:model=" + tiny_model() + ",rays=primary,count=100", scene);
+  const auto many = make_accelerator("auto:model=" + tiny_model() + ",rays=primary,count=1e9", scene);
+  const AutoChoice &a = choice_of(*few), &b = choice_of(*many);
+  expect_minimises_prediction(a);
+  expect_minimises_prediction(b);
+  // Argmins of build + N·trace: more rays never choose a slower tree or a cheaper build.
+  if (!a.sampled && !b.sampled) {
+    EXPECT_LE(b.predicted_ns_per_ray, a.predicted_ns_per_ray);
+    EXPECT_GE(b.predicted_build_s, a.predicted_build_s);
+  }
+  EXPECT_NEAR(b.predicted_trace_s, 1e9 * b.predicted_ns_per_ray * 1e-9, 1e-9 * b.predicted_trace_s);
+}
+
+TEST(AutoAccel, WithoutACountNothingIsTimedAndTheChoiceRepeats) {
+  const auto scene = make_scene("soup:n=2500");
+  const std::string spec = "auto:model=" + tiny_model() + ",rays=diffuse";
+  const auto one = make_accelerator(spec, scene), two = make_accelerator(spec, scene);
+  const AutoChoice &a = choice_of(*one), &b = choice_of(*two);
+  EXPECT_EQ(a.method, "predicted");
+  EXPECT_FALSE(a.sampled);
+  EXPECT_EQ(a.candidates_built, 1u);
+  EXPECT_EQ(a.chosen, b.chosen);
+  EXPECT_EQ(one->structure_hash(), two->structure_hash());
+  // Without a count, the least predicted time per ray wins.
+  for (const AutoCandidate& k : a.candidates) {
+    if (k.skipped.empty()) {
+      EXPECT_GE(k.predicted_ns_per_ray, a.predicted_ns_per_ray) << k.spec;
+    }
+  }
+}
+
+TEST(AutoAccel, InstancedScenesChooseForEachPart) {
+  const auto scene = make_scene("instances:of=(sphere:n=800),count=6");
+  const auto accel = make_accelerator("auto:model=" + tiny_model() + ",rays=primary,count=5000", scene);
+  const AutoChoice& c = choice_of(*accel);
+  EXPECT_EQ(c.method, "predicted");
+  EXPECT_GE(c.candidates_built, 1u);
+  const std::vector<Ray> rays = make_ray_set("primary:512", scene);
+  const auto reference = make_accelerator("embree", scene);
+  EXPECT_EQ(compare_hits(rays, trace_rays(*accel, rays, {1}).hits, trace_rays(*reference, rays, {1}).hits,
+                         length(Vec3d(scene->bounds().diagonal())))
+                .mismatches,
+            0u);
+}
+
+TEST(AutoAccel, WithoutBuildTimeModelsEveryCandidateIsBuiltAndSaysSo) {
+  const auto scene = make_scene("sphere:n=600");
+  const auto accel = make_accelerator("auto:model=default,rays=primary,count=1000", scene);
+  const AutoChoice& c = choice_of(*accel);
+  EXPECT_EQ(c.method, "built-all");
+  EXPECT_FALSE(c.note.empty());
+  EXPECT_EQ(built_count(c), c.candidates_built);
+  EXPECT_GE(c.candidates_built, 8u);
+}
+
+TEST(AutoAccel, ABadCountIsOneErrorNamingTheForm) {
+  const auto scene = make_scene("sphere:n=200");
+  for (const char* bad : {"-5", "abc", "0", "2.5", "1e30"}) {
+    try {
+      make_accelerator(std::string("auto:rays=primary,count=") + bad, scene);
+      ADD_FAILURE() << "count=" << bad << " accepted";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("count=" + std::string(bad)), std::string::npos) << what;
+      EXPECT_NE(what.find("auto:rays=KIND,count=N"), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(AutoAccel, TraceHandsItsRayCountDownAndPrintsTheChoice) {
+  const fs::path out = scratch_dir() / "trace.json", err = scratch_dir() / "trace.err";
+  const std::string cmd = std::string(RAYLAB_TOOL_PATH) + " trace --scene soup:n=2000 --accel auto:model=" +
+                          tiny_model() + ",rays=primary --rays primary:777 --threads 1 --json >" + out.string() +
+                          " 2>" + err.string();
+  const int raw = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 0) << cmd;
+  std::stringstream text;
+  text << std::ifstream(out).rdbuf();
+  const auto j = nlohmann::json::parse(text.str());
+  EXPECT_EQ(j.at("auto_method"), "predicted");
+  EXPECT_EQ(j.at("auto_count").get<double>(), j.at("rays").get<double>());  // primary:777 rounds to its pixel grid
+  for (const char* key : {"auto_choose_s", "auto_predicted_build_s", "auto_predicted_trace_s", "build_s", "trace_s"})
+    EXPECT_TRUE(j.at(key).is_number()) << key;
+  EXPECT_FALSE(j.at("auto_choice").at("chosen").get<std::string>().empty());
+  EXPECT_TRUE(j.at("auto_runner_up").at("spec").is_string());
+  EXPECT_TRUE(j.at("auto_runner_up").at("predicted_total_s").is_number());
+  const std::size_t built = j.at("auto_candidates_built");
+  EXPECT_EQ(built, j.at("auto_sampled").get<bool>() ? 2u : 1u);
+
+  const std::string bad = std::string(RAYLAB_TOOL_PATH) +
+                          " trace --scene soup:n=200 --accel auto:count=-5 --rays primary:16 >" + out.string() +
+                          " 2>" + err.string();
+  const int status = std::system(bad.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  std::stringstream e;
+  e << std::ifstream(err).rdbuf();
+  const std::string message = e.str();
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << message;
+  EXPECT_EQ(message.rfind("raylab: error: ", 0), 0u) << message;
+}
+
+}  // namespace
+}  // namespace raylab
