@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -173,12 +174,19 @@ class CostModelExperiment {
 
   std::string intro() const {
     std::set<std::string> scenes;
-    for (const RunRecord& r : runs_) scenes.insert(r.scene);
+    std::int64_t replicates = 0, fewest = std::numeric_limits<std::int64_t>::max(), most = 0;
+    for (const RunRecord& r : runs_) {
+      scenes.insert(r.scene);
+      replicates += r.replicate > 0;
+      fewest = std::min(fewest, r.primitives);
+      most = std::max(most, r.primitives);
+    }
     return fmt::format(
         "The lecture: Cost(node) = C_trav + P(L)·Cost(L) + P(R)·Cost(R), with hit probabilities from surface areas "
         "and leaf costs from triangle counts, and two quoted ratios C_trav:C_isect, 1:80 (pbrt) and 1:1.5 (\"a "
-        "highly optimized version\"). Here every structure of the lab is measured on {} scenes ({} rows: scenes × "
-        "structures × camera, diffuse and shadow rays, single thread, each time the minimum of at least 5 passes "
+        "highly optimized version\"). Here every structure of the lab is measured on {} scenes of {} to {} triangles ({} rows: "
+        "each scene × the structures the plan runs on it × camera, diffuse and shadow rays, {} of them replicates "
+        "measured again after the others on a rebuilt structure; single thread, each time the minimum of at least 5 passes "
         "alternating with Embree's on the same rays), and two models are fitted per structure family with Ceres "
         "(Huber loss at 10% on relative residuals, constants ≥ 0, standard errors from the covariance):\n\n"
         "- **counters**: ns/ray = c0 + c_node·nodes + c_leaf·leaves + c_test·tests [+ corrections], on the "
@@ -191,7 +199,7 @@ class CostModelExperiment {
         "least disturbed Embree minimum on the same scene and rays), which removes most machine noise. Terms are "
         "chosen by leave-one-scene-out cross-validation: a term that does not lower the held-out error is dropped.\n\n"
         "Sweep: {:.0f} s for {} cases; fit (both levels, every family, model selection): {:.0f} s.\n\n",
-        scenes.size(), runs_.size(), sweep_seconds_, runs_.size(), fit_seconds_);
+        scenes.size(), fewest, most, runs_.size(), replicates, sweep_seconds_, runs_.size(), fit_seconds_);
   }
 
   std::string constants_section() {
