@@ -188,6 +188,16 @@ TEST(CostPlan, APlanWithReplicatesSweepsShardsAndMerges) {
     EXPECT_EQ(whole[i].lines_per_ray_est, first.lines_per_ray_est);
     EXPECT_GT(whole[i].ns_per_ray_min, 0);
   }
+  // A resumed sweep takes the replicates of a file as the plan's and measures the rest.
+  {
+    SweepOptions o;
+    o.out = sweep_into("resumed.csv", {0, 2});
+    o.resume = true;
+    o.timing.min_seconds = 0;
+    const SweepSummary s = run_sweep(plan, o);
+    EXPECT_EQ(s.skipped + s.measured, plan.case_count());
+    EXPECT_EQ(static_cast<std::int64_t>(read_runs_csv(o.out).size()), plan.case_count());
+  }
   for (const RunRecord& r : whole) {
     EXPECT_GT(r.lines_per_ray_est, 0) << r.accel;
     EXPECT_GT(r.working_set_bytes_est, 0) << r.accel;
