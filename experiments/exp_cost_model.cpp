@@ -11,14 +11,17 @@
 //  4. trees built from the fitted model (cost=) against trees built with 1:80 and 1:1.5, for the
 //     kd-tree and the BVH, timed against each other in alternating passes;
 //  5. `auto`'s choice against the fastest candidate measured, per held-out scene and ray kind.
-// Writes cost_runs.csv (the data set), cost_model.json, cost_heldout.csv, cost_model.csv and
-// cost_model.md.
+//  6. memory: time per node visit against structure size and the caches, measured and as the
+//     counters model predicts it, per structure family (cost_memory.csv, cost_memory.png).
+// Writes cost_runs.csv (the data set), cost_model.json, cost_heldout.csv, cost_model.csv,
+// cost_memory.csv and cost_model.md.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -136,6 +139,7 @@ class CostModelExperiment {
     md += builders_section();
     md += auto_section();
     md += "![predicted against measured ns per ray on held-out scenes; fitted constants](cost_model.png)\n\n";
+    md += memory_section();
     md += fmt::format(
         "Measured by `build/experiments/exp_cost_model --mode {}` (run by `./lab report`), which runs `raylab sweep "
         "--plan {}` into cost_runs.csv and `raylab fit` into cost_model.json (`./lab report` copies it to "
@@ -170,12 +174,19 @@ class CostModelExperiment {
 
   std::string intro() const {
     std::set<std::string> scenes;
-    for (const RunRecord& r : runs_) scenes.insert(r.scene);
+    std::int64_t replicates = 0, fewest = std::numeric_limits<std::int64_t>::max(), most = 0;
+    for (const RunRecord& r : runs_) {
+      scenes.insert(r.scene);
+      replicates += r.replicate > 0;
+      fewest = std::min(fewest, r.primitives);
+      most = std::max(most, r.primitives);
+    }
     return fmt::format(
         "The lecture: Cost(node) = C_trav + P(L)·Cost(L) + P(R)·Cost(R), with hit probabilities from surface areas "
         "and leaf costs from triangle counts, and two quoted ratios C_trav:C_isect, 1:80 (pbrt) and 1:1.5 (\"a "
-        "highly optimized version\"). Here every structure of the lab is measured on {} scenes ({} rows: scenes × "
-        "structures × camera, diffuse and shadow rays, single thread, each time the minimum of at least 5 passes "
+        "highly optimized version\"). Here every structure of the lab is measured on {} scenes of {} to {} triangles ({} rows: "
+        "each scene × the structures the plan runs on it × camera, diffuse and shadow rays, {} of them replicates "
+        "measured again after the others on a rebuilt structure; single thread, each time the minimum of at least 5 passes "
         "alternating with Embree's on the same rays), and two models are fitted per structure family with Ceres "
         "(Huber loss at 10% on relative residuals, constants ≥ 0, standard errors from the covariance):\n\n"
         "- **counters**: ns/ray = c0 + c_node·nodes + c_leaf·leaves + c_test·tests [+ corrections], on the "
@@ -188,7 +199,7 @@ class CostModelExperiment {
         "least disturbed Embree minimum on the same scene and rays), which removes most machine noise. Terms are "
         "chosen by leave-one-scene-out cross-validation: a term that does not lower the held-out error is dropped.\n\n"
         "Sweep: {:.0f} s for {} cases; fit (both levels, every family, model selection): {:.0f} s.\n\n",
-        scenes.size(), runs_.size(), sweep_seconds_, runs_.size(), fit_seconds_);
+        scenes.size(), fewest, most, runs_.size(), replicates, sweep_seconds_, runs_.size(), fit_seconds_);
   }
 
   std::string constants_section() {
@@ -414,6 +425,69 @@ class CostModelExperiment {
     md += fmt::format("\n`auto` within 10% of the fastest: {} of {} cases ({}).\n\n", within, total,
                       pct(total ? double(within) / total : 0.0));
     return md;
+  }
+
+  /// Time per node visit (nodes + leaves of the counted pass) on the data set, measured and as the
+  /// counters model predicts it, against triangles and structure bytes: where the structure leaves
+  /// the caches, the time per visit grows unless the model has a term for it.
+  std::string memory_section() {
+    CsvWriter csv(opt_.out + "/cost_memory.csv",
+                  {"family", "scene", "accel", "rays", "replicate", "primitives", "bytes", "l2_bytes", "llc_bytes",
+                   "cache_source", "bytes_over_llc", "working_set_bytes_est", "lines_per_ray_est", "visits_per_ray",
+                   "measured_ns_per_visit", "counters_ns_per_visit"});
+    struct Decade {
+      std::vector<double> measured, model;
+    };
+    std::map<std::string, std::map<int, Decade>> by_family;  // family -> ⌊log10 triangles⌋
+    std::set<std::string> sources;
+    std::int64_t l2 = 0, llc = 0;
+    double largest = 0;
+    for (const RunRecord& r : runs_) {
+      const double visits = r.nodes_per_ray + r.leaves_per_ray;
+      if (!(visits > 0) || !set_.families.count(r.family)) continue;
+      const double measured = r.ns_per_ray_min / visits, model = set_.family(r.family).counters.model.predict(r) / visits;
+      csv.row(r.family, r.scene, r.accel, r.rays, r.replicate, r.primitives, r.bytes, r.l2_bytes, r.llc_bytes,
+              r.cache_source.empty() ? std::string("unrecorded") : r.cache_source, r.bytes_over_llc, r.working_set_bytes_est,
+              r.lines_per_ray_est, visits, measured, model);
+      Decade& d = by_family[r.family][static_cast<int>(std::floor(std::log10(std::max<double>(1, r.primitives))))];
+      d.measured.push_back(measured);
+      d.model.push_back(model);
+      sources.insert(r.cache_source.empty() ? std::string("unrecorded") : r.cache_source);
+      l2 = std::max(l2, r.l2_bytes);
+      llc = std::max(llc, r.llc_bytes);
+      largest = std::max(largest, static_cast<double>(r.primitives));
+    }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      const std::size_t n = v.size();
+      return n == 0 ? NAN : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    };
+    std::string md = fmt::format(
+        "### Memory: time per node visit against scale\n\nMedian ns per node visit (nodes + leaves of the counted "
+        "pass; fit-target times) per structure family and decade of triangles, measured and (in parentheses) as the "
+        "fitted counters model predicts it, on the data set's {} rows up to {:.3g} triangles. This machine's caches "
+        "as the rows record them: L2 {:.3g} MiB, last level {:.3g} MiB (source: {}).\n\n"
+        "| structure | 10^3 | 10^4 | 10^5 | 10^6 |\n|---|---|---|---|---|\n",
+        runs_.size(), largest, static_cast<double>(l2) / (1 << 20), static_cast<double>(llc) / (1 << 20),
+        join(std::vector<std::string>(sources.begin(), sources.end())));
+    for (const auto& [family, decades] : by_family) {
+      md += "| `" + family + "` ";
+      for (int d = 3; d <= 6; ++d) {
+        const auto it = decades.find(d);
+        md += it == decades.end() ? std::string("| – ")
+                                  : fmt::format("| {:.2f} ({:.2f}) ", median(it->second.measured), median(it->second.model));
+      }
+      md += "|\n";
+    }
+    return md +
+           "\n![ns per node visit against triangles and structure bytes](cost_memory.png)\n\n*Figure: measured ns per "
+           "node visit (points, one per row of the data set) and the fitted counters model's prediction per visit "
+           "(lines: medians per half decade) per structure family, against the scene's triangles (left) and the "
+           "structure's bytes (right; dotted: this machine's L2 and last-level cache sizes). Log axes. Rows: "
+           "cost_memory.csv, which also holds the memory features of each row (bytes over the last-level cache, the "
+           "estimated working set of a batch of " +
+           std::to_string(kWorkingSetBatch) +
+           " random lines and lines touched per ray: estimates from counts and surface areas, tree_features.h).*\n\n";
   }
 
   struct BuilderRow {

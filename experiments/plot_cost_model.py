@@ -1,6 +1,8 @@
 """Plots of exp_cost_model: predicted against measured ns per ray on the held-out scenes for the
 counters model, the tree model and plain SAH at 1:80 and 1:1.5; the fitted per-event constants
-with their standard errors; trees built from the fitted model against the textbook ratios."""
+with their standard errors; trees built from the fitted model against the textbook ratios; and
+(cost_memory.png) ns per node visit against triangles and structure bytes, measured and as the
+counters model predicts it, per structure family."""
 import pathlib
 
 import matplotlib
@@ -30,7 +32,59 @@ def _scatter(ax, h, column, title):
     ax.grid(True, which="both", alpha=0.2)
 
 
+def _half_decade_medians(g, x_column, y_column):
+    """Medians of y per half decade of x, at the bins' geometric middles."""
+    x = np.log10(g[x_column].to_numpy(float))
+    y = g[y_column].to_numpy(float)
+    bins = np.floor(2 * x)
+    xs, ys = [], []
+    for b in np.unique(bins):
+        sel = bins == b
+        xs.append(10 ** ((b + 0.5) / 2))
+        ys.append(np.median(y[sel]))
+    return np.array(xs), np.array(ys)
+
+
+def plot_memory(out: pathlib.Path) -> None:
+    csv = out / "cost_memory.csv"
+    if not csv.exists():
+        return
+    df = pd.read_csv(csv)
+    df = df[(df["measured_ns_per_visit"] > 0) & (df["counters_ns_per_visit"] > 0) & (df["primitives"] > 0)]
+    if df.empty:
+        return
+    fig, axes = plt.subplots(1, 2, figsize=(14, 5.5), sharey=True)
+    families = sorted(df["family"].unique())[:10]  # 10 families + 2 style entries: at most 12 legend entries
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, x_column, label in ((axes[0], "primitives", "triangles"), (axes[1], "bytes", "structure bytes")):
+        for k, family in enumerate(families):
+            g = df[df["family"] == family]
+            color = colors[k % len(colors)]
+            ax.scatter(g[x_column], g["measured_ns_per_visit"], s=6, alpha=0.35, color=color)
+            xs, ys = _half_decade_medians(g, x_column, "counters_ns_per_visit")
+            ax.plot(xs, ys, color=color, linewidth=1.6, label=family if ax is axes[0] else None)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(label)
+        ax.grid(True, which="both", alpha=0.2)
+    for size, name in ((df["l2_bytes"].max(), "L2"), (df["llc_bytes"].max(), "last-level cache")):
+        if size > 0:
+            axes[1].axvline(size, color="black", linestyle=":", linewidth=0.9)
+            axes[1].annotate(name, (size, 0.97), xycoords=("data", "axes fraction"), fontsize=7, rotation=90,
+                             ha="right", va="top")
+    axes[0].set_ylabel("ns per node visit (nodes + leaves)")
+    axes[0].scatter([], [], s=6, color="gray", label="measured (one point per row)")
+    axes[0].plot([], [], color="gray", linewidth=1.6, label="counters model (median per half decade)")
+    axes[0].legend(fontsize=7, loc="upper left")
+    axes[0].set_title("time per node visit against scene size", fontsize=9)
+    axes[1].set_title("against structure size and this machine's caches", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "cost_memory.png", dpi=110)
+    plt.close(fig)
+
+
 def plot(out: pathlib.Path) -> None:
+    plot_memory(out)
     csv = out / "cost_model.csv"
     if not csv.exists():
         return

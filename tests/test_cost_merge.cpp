@@ -39,6 +39,7 @@ RunRecord row_of(const SweepPlan& plan, std::int64_t c) {
   r.scene = k.scene;
   r.accel = k.accel;
   r.rays = k.rays;
+  r.replicate = k.replicate;
   r.host = "node" + std::to_string(c % 3);
   r.cpu_model = "test CPU";
   r.ns_per_ray_min = 10.0 + static_cast<double>(c) / 7.0;  // a value that must survive the merge to the last bit
@@ -181,6 +182,44 @@ TEST(CostMerge, ARowOfAnotherPlanIsRejectedByFileAndLine) {
   SweepPlan longer = plan12();
   longer.scenes.push_back("sphere:n=200");
   EXPECT_THROW(collect_shards(plan12(), {write_shard(longer, 0, 1)}), InputError);
+}
+
+/// plan12 with cases 1, 6 and 11 measured twice more: cases 12..17 are their replicates.
+SweepPlan plan12_with_replicates() {
+  SweepPlan p = plan12();
+  p.replicated = {1, 6, 11};
+  p.replicate_repeats = 2;
+  return p;
+}
+
+TEST(CostMerge, ReplicatesAreCasesOfThePlanWithTheirFirstMeasurementsKey) {
+  const SweepPlan plan = plan12_with_replicates();
+  ASSERT_EQ(plan.case_count(), 18);
+  for (std::int64_t c = 12; c < 18; ++c) {
+    const SweepCase k = plan.case_at(c), first = plan.case_at(plan.replicated[static_cast<std::size_t>((c - 12) % 3)]);
+    EXPECT_EQ(k.replicate, (c - 12) / 3 + 1);
+    EXPECT_EQ(k.first_case, first.number);
+    EXPECT_EQ(k.scene + k.accel + k.rays, first.scene + first.accel + first.rays);
+  }
+  std::vector<std::string> files;
+  for (int k = 0; k < 4; ++k) files.push_back(write_shard(plan, k, 4));
+  const MergeOptions o = options_for(files, 4, "replicates.csv");
+  EXPECT_TRUE(merge_shards(plan, o).complete());
+  const std::vector<RunRecord> rows = read_runs_csv(o.out);
+  ASSERT_EQ(rows.size(), 18u);
+  for (std::int64_t c = 0; c < 18; ++c) {
+    EXPECT_EQ(rows[static_cast<std::size_t>(c)].case_number, c);
+    EXPECT_EQ(rows[static_cast<std::size_t>(c)].replicate, plan.case_at(c).replicate);
+  }
+  // A shard of replicates missing is reported like any other; a replicate row passed off as a first
+  // measurement (replicate 0) is not the plan's case.
+  EXPECT_EQ(collect_shards(plan, {files[0], files[1], files[3]}, 4).missing_cases,
+            (std::vector<std::int64_t>{2, 6, 10, 14}));
+  RunRecord wrong = row_of(plan, 13);
+  wrong.replicate = 0;
+  EXPECT_THROW(check_row_in_plan(plan, wrong, "test"), InputError);
+  // The plan without its replicates does not hold cases 12..17.
+  EXPECT_THROW(collect_shards(plan12(), {files[0]}, 4), InputError);
 }
 
 }  // namespace

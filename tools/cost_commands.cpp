@@ -84,9 +84,8 @@ int run_sweep_command(const SweepCommand& o) {
   const ShardSpec shard = parse_shard(o.shard);
   const SweepPlan plan = load_plan(o.plan);
   if (o.check) {
-    std::cout << fmt::format("plan {} ({}): {} cases = {} scenes x {} accels x {} rays\n", plan.source,
-                             std::filesystem::absolute(plan_path(plan.source)).string(), plan.case_count(),
-                             plan.scenes.size(), plan.accels.size(), plan.rays.size());
+    std::cout << fmt::format("plan {} ({}): {}\n", plan.source, std::filesystem::absolute(plan_path(plan.source)).string(),
+                             plan.describe());
     return 0;
   }
   SweepOptions options;

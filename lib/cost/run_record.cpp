@@ -18,6 +18,7 @@ using Member = std::variant<std::string RunRecord::*, std::int64_t RunRecord::*,
 struct Column {
   const char* name;
   Member member;
+  bool optional = false;  ///< added after the first data sets: a file without it reads the default
 };
 
 /// The one table of columns: header, writer and reader all loop over it.
@@ -63,6 +64,13 @@ const std::vector<Column>& columns() {
       {"references", &RunRecord::references},
       {"depth", &RunRecord::depth},
       {"bytes", &RunRecord::bytes},
+      {"replicate", &RunRecord::replicate, true},
+      {"l1d_bytes", &RunRecord::l1d_bytes, true},
+      {"cache_source", &RunRecord::cache_source, true},
+      {"lines_per_ray_est", &RunRecord::lines_per_ray_est, true},
+      {"working_set_bytes_est", &RunRecord::working_set_bytes_est, true},
+      {"bytes_over_l2", &RunRecord::bytes_over_l2, true},
+      {"bytes_over_llc", &RunRecord::bytes_over_llc, true},
   };
   return table;
 }
@@ -90,7 +98,10 @@ const std::vector<std::string>& run_record_columns() {
 
 std::string runs_csv_header() {
   std::string line;
-  for (const Column& c : columns()) line += (line.empty() ? "" : ",") + std::string(c.name);
+  for (const Column& c : columns()) {
+    if (!line.empty()) line += ',';
+    line += c.name;
+  }
   return line;
 }
 
@@ -145,6 +156,10 @@ std::vector<RunRecord> read_runs_csv(const std::string& path, bool allow_empty, 
       for (std::size_t i = 0; i < fields.size(); ++i) have[fields[i]] = static_cast<int>(i);
       for (const Column& c : columns()) {
         const auto it = have.find(c.name);
+        if (it == have.end() && c.optional) {
+          index_of.push_back(-1);
+          continue;
+        }
         if (it == have.end()) throw InputError(where + ": the header lacks the column '" + c.name + "' (not a runs file?)");
         index_of.push_back(it->second);
       }
@@ -154,6 +169,7 @@ std::vector<RunRecord> read_runs_csv(const std::string& path, bool allow_empty, 
     RunRecord r;
     for (std::size_t k = 0; k < columns().size(); ++k) {
       const Column& c = columns()[k];
+      if (index_of[k] < 0) continue;  // an optional column the file lacks: the default
       const auto field_index = static_cast<std::size_t>(index_of[k]);
       if (field_index >= fields.size())
         throw InputError(where + ": " + std::to_string(fields.size()) + " fields, the column '" + c.name + "' is missing");
@@ -174,6 +190,7 @@ std::vector<RunRecord> read_runs_csv(const std::string& path, bool allow_empty, 
     }
     if (r.scene.empty() || r.accel.empty() || r.rays.empty()) throw InputError(where + ": empty scene, accel or rays");
     if (r.case_number < 0) throw InputError(where + ": negative case number");
+    if (r.replicate < 0) throw InputError(where + ": negative replicate");
     rows.push_back(std::move(r));
   }
   if (truncated_tail && pos >= text.size()) *truncated_tail = text.size();

@@ -7,6 +7,10 @@
 /// that order when the lab writes it; a reader takes them in any order and ignores extra columns.
 /// Times are nanoseconds per ray of the clock `clock` names (timing.h: the tracing thread's CPU
 /// time for single-threaded passes, else wall clock); counters and features are per ray.
+///
+/// Columns added after the first data sets (replicate, the cache sizes' source, the memory
+/// features) are optional when reading: a file without them reads with their defaults, so older
+/// runs CSVs stay readable.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,6 +46,20 @@ struct RunRecord {
   // Features of the structure alone (tree_features.h).
   double e_inner = 0, e_leaves = 0, e_tests = 0, e_test_groups = 0, sah_1_1 = 0, epo = 0;
   std::int64_t inner_nodes = 0, leaves = 0, references = 0, depth = 0, bytes = 0;
+
+  // Replicates (sweep.h): 0 for a case's first measurement, k for its k-th repeat, which has its
+  // own case number and the same (scene, accel, rays).
+  std::int64_t replicate = 0;
+
+  // The cache sizes of provenance.h beside l2_bytes and llc_bytes.
+  std::int64_t l1d_bytes = 0;
+  std::string cache_source;  ///< provenance.h: CacheSizes::source
+
+  // Memory features (tree_features.h: fill_memory_features). Estimates, not measured addresses.
+  double lines_per_ray_est = 0;      ///< distinct 64-byte lines of structure data one ray touches
+  double working_set_bytes_est = 0;  ///< structure bytes a batch of kWorkingSetBatch random lines touches
+  double bytes_over_l2 = 0;          ///< bytes / l2_bytes (0 when the size is unknown)
+  double bytes_over_llc = 0;         ///< bytes / llc_bytes (0 when the size is unknown)
 
   bool any_hit() const { return query == "occluded"; }
 };

@@ -1,6 +1,7 @@
 #include "cost/tree_features.h"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <optional>
@@ -30,6 +31,7 @@ class SurfaceSums {
     f_.bytes = bytes;
   }
   void inner(double area, int depth) {
+    f_.batch_cells += batch_visit_probability(area * inv_root_);
     f_.expected_inner += area * inv_root_;
     ++f_.inner_nodes;
     f_.depth = std::max(f_.depth, depth);
@@ -39,6 +41,7 @@ class SurfaceSums {
     f_.depth = std::max(f_.depth, depth);
     if (prims == 0) return;  // empty leaves cost no test and are skipped by the traversals
     const double p = area * inv_root_;
+    f_.batch_cells += batch_visit_probability(p);
     f_.expected_leaves += p;
     f_.expected_tests += p * static_cast<double>(prims);
     f_.expected_test_groups += p * static_cast<double>(groups > 0 ? groups : (prims + 3) / 4);
@@ -48,6 +51,13 @@ class SurfaceSums {
   TreeFeatures& features() { return f_; }
 
  private:
+  /// 1 − (1 − p)^B: the chance that at least one of a batch of B random lines visits a cell of
+  /// visit probability p.
+  static double batch_visit_probability(double p) {
+    p = std::clamp(p, 0.0, 1.0);
+    return p >= 1.0 ? 1.0 : -std::expm1(kWorkingSetBatch * std::log1p(-p));
+  }
+
   double inv_root_;
   TreeFeatures f_;
 };
@@ -202,6 +212,7 @@ const std::map<std::string, Extractor>& extractors() {
          f.expected_leaves = 1.0;
          f.expected_tests = static_cast<double>(s.primitive_count());
          f.expected_test_groups = static_cast<double>((s.primitive_count() + 3) / 4);
+         f.batch_cells = 1.0;
          return f;
        }},
   };
@@ -248,6 +259,17 @@ void fill_tree_features(RunRecord& r, const TreeFeatures& f) {
   r.bytes = static_cast<std::int64_t>(f.bytes);
 }
 
+void fill_memory_features(RunRecord& r, const TreeFeatures& f) {
+  const std::size_t cells = f.inner_nodes + f.leaves;
+  const double bytes = static_cast<double>(f.bytes);
+  const double cell_bytes = cells > 0 ? bytes / static_cast<double>(cells) : bytes;
+  const double lines_per_cell = cell_bytes > 0 ? 1.0 + (cell_bytes - 1.0) / 64.0 : 0.0;
+  r.lines_per_ray_est = (r.nodes_per_ray + r.leaves_per_ray) * lines_per_cell;
+  r.working_set_bytes_est = std::min(bytes, cell_bytes * f.batch_cells);
+  r.bytes_over_l2 = r.l2_bytes > 0 ? bytes / static_cast<double>(r.l2_bytes) : 0.0;
+  r.bytes_over_llc = r.llc_bytes > 0 ? bytes / static_cast<double>(r.llc_bytes) : 0.0;
+}
+
 RunRecord record_for_prediction(const TreeFeatures& f, const std::string& ray_kind, double primitives) {
   RunRecord r;
   r.ray_kind = ray_kind;
@@ -256,7 +278,10 @@ RunRecord record_for_prediction(const TreeFeatures& f, const std::string& ray_ki
   const Provenance& p = provenance_of_this_process();
   r.l2_bytes = p.l2_bytes;
   r.llc_bytes = p.llc_bytes;
+  r.l1d_bytes = p.l1d_bytes;
+  r.cache_source = p.cache_source;
   fill_tree_features(r, f);
+  fill_memory_features(r, f);
   return r;
 }
 
