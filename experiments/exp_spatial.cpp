@@ -21,6 +21,7 @@
 #include "accel/kdtree/kdtree_config.h"
 #include "experiment_common.h"
 #include "cost/fit.h"
+#include "cost/replicates.h"
 #include "scene/scene_spec.h"
 
 using namespace raylab;
@@ -131,6 +132,30 @@ class Runner {
     csv_.row(part, scene_spec, m.triangles, ray_spec, r.size(), accel_spec, param, m.build_s, m.stats.nodes, m.stats.bytes,
              m.stats.sah_cost, m.nodes_per_ray, m.leaves_per_ray, m.tests_per_ray, m.ns, m.embree_ns, m.ratio());
     return m;
+  }
+
+  /// Builds each of `accel_specs` on the scene in `rounds` alternated rounds (one build of each per
+  /// round, in turn), timed in the building thread's CPU time; writes one CSV row per spec with the
+  /// median seconds. Returns seconds[spec][round].
+  std::vector<std::vector<double>> build_rounds(const std::string& part, const std::string& scene_spec,
+                                                const std::vector<std::string>& accel_specs,
+                                                const std::vector<std::string>& params, int rounds) {
+    progress(fmt::format("spatial: {} {} in {} rounds", part, scene_spec, rounds));
+    const auto s = scene(scene_spec);
+    std::vector<AccelStats> stats(accel_specs.size());
+    std::vector<std::function<double()>> builds;
+    for (std::size_t i = 0; i < accel_specs.size(); ++i)
+      builds.push_back([&, i] {
+        std::unique_ptr<Aggregate> accel;
+        const double t = thread_cpu_seconds_of([&] { accel = make_accelerator(accel_specs[i], s); });
+        stats[i] = accel->stats();
+        return t;
+      });
+    auto seconds = alternate_rounds(builds, rounds);
+    for (std::size_t i = 0; i < accel_specs.size(); ++i)
+      csv_.row(part, scene_spec, s->mesh.size(), "", 0, accel_specs[i], params[i], median(seconds[i]), stats[i].nodes,
+               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    return seconds;
   }
 
   /// Best CPU time of `repeats` medium-quality Embree builds of the scene confined to the calling
@@ -312,33 +337,75 @@ int main(int argc, char** argv) {
     // 3. Build complexity of the two sweeps (claim 4).
     md += "\n" + section_anchor("claim-4") + "### Build complexity: sort against event sweep\n\n";
     const int max_log = opt.full() ? 22 : 18;
-    std::map<std::string, std::vector<double>> ns, ts;
+    const int build_rounds = opt.full() ? 7 : 5;
+    // Per N: the build seconds of each sweep over alternated rounds (sort, events, sort, ...).
+    std::map<std::string, std::vector<double>> ns;
+    std::map<std::string, std::vector<std::vector<double>>> reps;
+    std::vector<double> embree_s;
     for (int k = 12; k <= max_log; ++k) {
       const std::string s = fmt::format("sphere:n={}", 1 << k);
-      for (const std::string sw : {"sort", "events"}) {
-        // Best of 3 builds up to 2^16 triangles (a few seconds at most), one beyond.
-        const Measured m = run.run("build", s, "primary:16", "kdtree:sweep=" + sw, sw, false, k <= 16 ? 3 : 1);
-        ns[sw].push_back(static_cast<double>(m.triangles));
-        ts[sw].push_back(m.build_s);
+      const auto rounds = run.build_rounds("build", s, {"kdtree:sweep=sort", "kdtree:sweep=events"}, {"sort", "events"},
+                                            build_rounds);
+      for (const auto& [i, sw] : {std::pair{0, "sort"}, std::pair{1, "events"}}) {
+        ns[sw].push_back(static_cast<double>(run.scene(s)->mesh.size()));
+        reps[sw].push_back(rounds[static_cast<std::size_t>(i)]);
       }
       const Measured e = run.run("build", s, "primary:16", "embree", "embree", false);
-      ts["embree"].push_back(e.build_s);
+      embree_s.push_back(e.build_s);
     }
+    // The sort/events ratio per round: both builds of a round share the machine's state.
+    std::vector<std::vector<double>> ratio_reps;
+    for (std::size_t i = 0; i < reps["sort"].size(); ++i) {
+      ratio_reps.emplace_back();
+      for (std::size_t r = 0; r < reps["sort"][i].size(); ++r) ratio_reps.back().push_back(reps["sort"][i][r] / reps["events"][i][r]);
+    }
+    std::map<std::string, std::vector<double>> ts;  // the median build seconds per N
+    for (const std::string sw : {"sort", "events"})
+      for (const auto& r : reps[sw]) ts[sw].push_back(median(r));
+    std::vector<double> logs;
+    std::vector<std::vector<double>> log_column;
+    for (double n : ns["sort"]) logs.push_back(std::log2(n)), log_column.push_back({std::log2(n)});
+    // The threshold, fixed before the measurement: with an extra log factor in the sort (N log² N
+    // against N log N) the ratio is k·log2 N and its slope b equals k; with equal complexities b = 0.
+    // The verdict compares b's interval with the midpoint k/2 of the two hypotheses.
+    const auto ratio_fit = [&](const std::vector<double>& ratio) {
+      const FitResult rf = fit_basis(logs, ratio, [](double x) { return x; });
+      const FitResult kf = fit_linear_terms(log_column, ratio);
+      return std::vector<double>{rf.values[0], rf.values[1], kf.values[0]};
+    };
+    const BootstrapFit ratio_boot = bootstrap_fit(ratio_reps, ratio_fit);
+    const Interval b_ratio = ratio_boot.parameters[1], k_ratio = ratio_boot.parameters[2];
+    const double threshold = k_ratio.value / 2;
     md += "**Claim** (lecture, *Sweep build algorithm*): sorting the candidate splits at every node gives "
           "T(N) = N log N + 2T(N/2) = N log² N; sweeping presorted events gives N log N. **Source**: I. Wald and "
           "V. Havran, \"On building fast kd-trees for ray tracing, and on doing that in O(N log N)\", *IEEE Symposium "
           "on Interactive Ray Tracing* 2006, pp. 61–69 (see [docs/theory.md](../theory.md#claim-4)).\n\n";
-    md += "**Experiment**: build time of the SAH kd-tree (exact clipping, single thread; CPU time of the building "
-          "thread, best of 3 builds up to 2^16 triangles) on tessellated spheres of "
-          "N = 2^12 … 2^" + std::to_string(max_log) + " triangles, every power of two, with `sweep=sort` and "
-          "`sweep=events`. Fits (Ceres, lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error: "
-          "t = a + b·f(N) for f = N log N and N log² N, compared by their Akaike criteria (same number of parameters); "
-          "t = c·N^α; and the discriminating one, t / (N log2 N) = a + b·log2 N, whose slope b is 0 for an N log N "
-          "build and positive for an N log² N one. Command: `build/experiments/exp_spatial --mode " + opt.mode + "`.\n\n";
+    md += "**Threshold, stated before measuring**: the build time of `sweep=sort` over that of `sweep=events` on the "
+          "same scene, fitted as a + b·log2 N, has slope b = k if the sort carries the extra log factor (the ratio "
+          "is then k·log2 N, k from the one-parameter fit) and b = 0 if both are N log N. The claim is confirmed "
+          "when the 95% interval of b lies above k/2 (the midpoint of the two hypotheses), refuted when it lies "
+          "below, and inconclusive at this noise when it contains k/2.\n\n";
+    md += fmt::format(
+        "**Experiment**: build time of the SAH kd-tree (exact clipping, single thread; CPU time of the building "
+        "thread) on tessellated spheres of N = 2^12 … 2^{} triangles, every power of two, with `sweep=sort` and "
+        "`sweep=events`, built in {} alternated rounds (sort, events, sort, …): each round gives one time of each and "
+        "one sort/events ratio; a point is the median over the rounds. Fits (Ceres, lib/cost/fit.h: relative "
+        "residuals, Huber loss at 10%) to the medians; every interval is a 95% percentile bootstrap over the rounds "
+        "(each point's rounds resampled, the medians refitted, 2000 resamples, fixed seed), so it is the spread a "
+        "rerun would show: t = a + b·f(N) for f = N log N and N log² N, compared by their Akaike criteria (same "
+        "number of parameters); t = c·N^α; and t / (N log2 N) = a + b·log2 N, whose slope b is 0 for an N log N "
+        "build and positive for an N log² N one. Command: `build/experiments/exp_spatial --mode {}`.\n\n",
+        max_log, build_rounds, opt.mode);
     md += "| sweep | fit | a (s) | b (ns) | R² | AIC |\n|---|---|---|---|---|---|\n";
     FitsCsv build_fits(opt.out + "/spatial_fits.csv");
     std::map<std::string, FitResult> slope_fits, power_fits;
+    std::map<std::string, Interval> alpha, slope_b;
     std::map<std::string, bool> log2_preferred;
+    const auto per_nlogn = [&](const std::vector<double>& t) {
+      std::vector<double> per;
+      for (std::size_t i = 0; i < t.size(); ++i) per.push_back(t[i] / (ns["sort"][i] * logs[i]) * 1e9);
+      return per;
+    };
     for (const std::string sw : {"sort", "events"}) {
       const FitResult f1 = fit_basis(ns[sw], ts[sw], [](double n) { return n * std::log2(n); });
       const FitResult f2 = fit_basis(ns[sw], ts[sw], [](double n) { return n * std::log2(n) * std::log2(n); });
@@ -350,38 +417,34 @@ int main(int argc, char** argv) {
       log2_preferred[sw] = f2.aic < f1.aic;
       power_fits[sw] = fit_power_law(ns[sw], ts[sw]);
       build_fits.row(sw, "build_s", "power", power_fits[sw], ns[sw]);
-      std::vector<double> logs, per;
-      for (std::size_t i = 0; i < ns[sw].size(); ++i) {
-        logs.push_back(std::log2(ns[sw][i]));
-        per.push_back(ts[sw][i] / (ns[sw][i] * std::log2(ns[sw][i])) * 1e9);
-      }
-      slope_fits[sw] = fit_basis(logs, per, [](double x) { return x; });
+      slope_fits[sw] = fit_basis(logs, per_nlogn(ts[sw]), [](double x) { return x; });
       build_fits.row(sw, "ns_per_NlogN", "linear", slope_fits[sw], logs);
+      const BootstrapFit boot = bootstrap_fit(reps[sw], [&](const std::vector<double>& t) {
+        return std::vector<double>{fit_power_law(ns[sw], t).values[1],
+                                   fit_basis(logs, per_nlogn(t), [](double x) { return x; }).values[1]};
+      });
+      alpha[sw] = boot.parameters[0];
+      slope_b[sw] = boot.parameters[1];
     }
-    md += "\n| sweep | t ∝ N^α | t/(N log2 N) = a + b·log2 N: a (ns) | b (ns) | N log² N fits better (AIC) |\n"
-          "|---|---|---|---|---|\n";
+    md += fmt::format("\nThe (a, b) table gives one fit's ± standard error to the medians; the columns below give "
+                      "95% bootstrap intervals over the {} rounds.\n\n"
+                      "| sweep | t ∝ N^α: α [95%] | t/(N log2 N) = a + b·log2 N: b (ns) [95%] | N log² N fits better (AIC) "
+                      "| rounds per N |\n|---|---|---|---|---|\n",
+                      build_rounds);
     for (const std::string sw : {"sort", "events"})
-      md += fmt::format("| {} | {} | {} | {} | {} |\n", sw, exponent_text(power_fits[sw]),
-                        format_with_error(slope_fits[sw].values[0], slope_fits[sw].std_errors[0]),
-                        format_with_error(slope_fits[sw].values[1], slope_fits[sw].std_errors[1]),
-                        log2_preferred[sw] ? "yes" : "no");
-    md += fmt::format("\nLargest N ({:.0f} triangles): sort {:.2f} s, events {:.2f} s, Embree (medium quality, its "
-                      "own threads) {:.3f} s; events/Embree = {:.0f}.\n\n",
-                      ns["events"].back(), ts["sort"].back(), ts["events"].back(), ts["embree"].back(),
-                      ts["events"].back() / ts["embree"].back());
+      md += fmt::format("| {} | {} | {} | {} | {} |\n", sw, format_interval(alpha[sw], 4), format_interval(slope_b[sw]),
+                        log2_preferred[sw] ? "yes" : "no", alpha[sw].replicates);
+    const Interval largest_sort = bootstrap_median(reps["sort"].back()), largest_events = bootstrap_median(reps["events"].back());
+    md += fmt::format("\nLargest N ({:.0f} triangles): sort {} s, events {} s (median [95%] over {} rounds), Embree "
+                      "(medium quality, its own threads, one build) {:.3f} s; events/Embree = {:.0f}.\n\n",
+                      ns["events"].back(), format_interval(largest_sort), format_interval(largest_events),
+                      largest_sort.replicates, embree_s.back(), ts["events"].back() / embree_s.back());
     {
       // The discriminating test: the ratio of the two builds' times on the same scene, which cancels
       // what both share (the machine, the caches, the clipping). N log² N against N log N makes it
-      // k·log2 N; equal complexities make it constant. Fitted as a + b·log2 N, with k from the
-      // one-parameter fit ratio = k·log2 N: resolved when b lies within two standard errors of one
-      // of 0 and k and more than two away from the other.
-      std::vector<double> logs, ratio;
-      std::vector<std::vector<double>> log_column;
-      for (std::size_t i = 0; i < ns["sort"].size(); ++i) {
-        logs.push_back(std::log2(ns["sort"][i]));
-        log_column.push_back({logs.back()});
-        ratio.push_back(ts["sort"][i] / ts["events"][i]);
-      }
+      // k·log2 N; equal complexities make it constant.
+      std::vector<double> ratio;
+      for (const auto& r : ratio_reps) ratio.push_back(median(r));
       const FitResult rf = fit_basis(logs, ratio, [](double x) { return x; });
       const FitResult kf = fit_linear_terms(log_column, ratio);
       build_fits.row("sort/events", "time_ratio", "linear", rf, logs);
@@ -389,33 +452,36 @@ int main(int argc, char** argv) {
       proportional.values = {0.0, kf.values[0]};
       proportional.std_errors = {0.0, kf.std_errors[0]};
       build_fits.row("sort/events", "time_ratio_if_nlog2n", "linear", proportional, logs);
-      const double se = std::max(rf.std_errors[1], 1e-12), k = kf.values[0];
-      const double z_flat = std::abs(rf.values[1]) / se, z_log = std::abs(rf.values[1] - k) / se;
-      const int resolved = z_log <= 2 && z_flat > 2 ? 1 : (z_flat <= 2 && z_log > 2 ? -1 : 0);
-      md += fmt::format("Build time of `sweep=sort` over `sweep=events` on the same scene, against log2 N: {:.2f} at "
-                        "N = {:.0f} … {:.2f} at N = {:.0f}; fit a + b·log2 N: a = {}, b = {} per doubling (an extra log "
-                        "factor in the sort would give b = {:.3f}, equal complexities b = 0).\n\n",
-                        ratio.front(), ns["sort"].front(), ratio.back(), ns["sort"].back(),
-                        format_with_error(rf.values[0], rf.std_errors[0]), format_with_error(rf.values[1], rf.std_errors[1]), k);
-      const Verdict v{"4", "build: N log² N (sort) against N log N (events)",
-                      resolved > 0 ? "confirmed" : (resolved < 0 ? "refuted" : "holds only under stated conditions"),
-                      fmt::format("t(sort)/t(events) = a + b·log2 N: b = {} per doubling (N log² N against N log N: "
-                                  "{:.3f}; equal: 0); t ∝ N^α: sort {}, events {}",
-                                  format_with_error(rf.values[1], rf.std_errors[1]), k, exponent_text(power_fits["sort"]),
-                                  exponent_text(power_fits["events"])),
+      const std::string verdict = !b_ratio.defined()          ? "inconclusive at this noise"
+                                  : b_ratio.lo > threshold ? "confirmed"
+                                  : b_ratio.hi < threshold ? "refuted"
+                                                           : "inconclusive at this noise";
+      md += fmt::format("Build time of `sweep=sort` over `sweep=events` on the same scene (median of {} rounds), "
+                        "against log2 N: {:.2f} at N = {:.0f} … {:.2f} at N = {:.0f}; fit a + b·log2 N: a = {}, "
+                        "**b = {} per doubling** (95% bootstrap interval over the rounds); an extra log factor in the "
+                        "sort would give b = k = {}, equal complexities b = 0; threshold k/2 = {:.3f}.\n\n",
+                        build_rounds, ratio.front(), ns["sort"].front(), ratio.back(), ns["sort"].back(),
+                        format_interval(ratio_boot.parameters[0]), format_interval(b_ratio), format_interval(k_ratio),
+                        threshold);
+      const Verdict v{"4", "build: N log² N (sort) against N log N (events)", verdict,
+                      fmt::format("t(sort)/t(events) = a + b·log2 N: b = {} per doubling, {} rounds per N (N log² N: "
+                                  "b = k = {:.3f}; equal: 0; threshold k/2 = {:.3f}); t ∝ N^α: sort α = {}, events α = {}; "
+                                  "spec `kdtree:sweep=sort` / `kdtree:sweep=events` (builder=sah, clip=exact, one thread) "
+                                  "on `sphere:n=2^12…2^{}`",
+                                  format_interval(b_ratio), build_rounds, k_ratio.value, threshold,
+                                  format_interval(alpha["sort"], 4), format_interval(alpha["events"], 4), max_log),
                       "claim-4"};
       md += verdict_paragraph(
-          v, fmt::format("The ratio of the two builds' times {} (b is {:.1f} standard errors from 0 and {:.1f} from the "
-                         "N log² N slope). Each build alone is dominated by what both share: its cost per N log2 N falls "
-                         "while per-node overheads amortise and rises once the tree outgrows the caches, so the slopes of "
-                         "t/(N log2 N) above (sort {}, events {} ns per doubling) do not separate them. Over 2^12 … 2^{} "
-                         "log N varies by only a factor {:.1f}{}.",
-                         resolved > 0   ? "grows with log N, as the sort's extra log factor says"
-                         : resolved < 0 ? "stays flat: over this range the sort costs a constant factor more, not a log factor"
-                                        : "is not resolved between the two hypotheses",
-                         z_flat, z_log, format_with_error(slope_fits["sort"].values[1], slope_fits["sort"].std_errors[1]),
-                         format_with_error(slope_fits["events"].values[1], slope_fits["events"].std_errors[1]), max_log,
-                         max_log / 12.0, opt.full() ? "" : "; `--full` extends the range to 2^22"));
+          v, fmt::format("The ratio of the two builds' times {}. Each build alone is dominated by what both share: its "
+                         "cost per N log2 N falls while per-node overheads amortise and rises once the tree outgrows the "
+                         "caches, so the slopes of t/(N log2 N) above (sort {}, events {} ns per doubling) do not "
+                         "separate them. Over 2^12 … 2^{} log N varies by only a factor {:.1f}{}.",
+                         verdict == "confirmed" ? "grows with log N, as the sort's extra log factor says"
+                         : verdict == "refuted" ? "grows by less than half the log factor: over this range the sort costs "
+                                                  "mostly a constant factor more"
+                                                : "is not resolved between the two hypotheses at this noise",
+                         format_interval(slope_b["sort"]), format_interval(slope_b["events"]), max_log, max_log / 12.0,
+                         opt.full() ? "" : "; `--full` extends the range to 2^22"));
       write_verdicts(opt.out, "spatial", {v});
     }
 
