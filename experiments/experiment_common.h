@@ -2,14 +2,19 @@
 /// Shared plumbing of the experiment binaries: options (--mode quick|full, --out DIR), timing
 /// by repetition, CSV output, and the provenance every result page states.
 #include <CLI/CLI.hpp>
+#include <boost/math/distributions/students_t.hpp>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <initializer_list>
+#include <limits>
+#include <stdexcept>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -26,7 +31,15 @@ struct Options {
   std::string mode = "quick";  ///< quick: the default `./lab report`; full: `./lab report --full`
   std::string out = "docs/results";
   std::string runs;  ///< exp_cost_model: take the cost model's data set from this runs CSV instead of sweeping
+  std::string claim;  ///< empty: every claim of the experiment; else only the part that decides this claim id
   bool full() const { return mode == "full"; }
+  /// Whether the part deciding claim `id` (or any of `ids`) runs: every part when no --claim was given.
+  bool runs_claim(std::initializer_list<const char*> ids) const {
+    if (claim.empty()) return true;
+    for (const char* id : ids)
+      if (claim == id) return true;
+    return false;
+  }
 };
 
 /// Parses the common options; exits with a one-line error on bad ones.
@@ -35,6 +48,7 @@ inline Options parse_options(int argc, char** argv, const std::string& descripti
   CLI::App app{description};
   app.add_option("--mode", o.mode, "quick | full")->check(CLI::IsMember({"quick", "full"}));
   app.add_option("--out", o.out, "output directory for CSV and Markdown");
+  app.add_option("--claim", o.claim, "run only the part of the experiment that decides this claim (e.g. 1b)");
   app.add_option("--runs", o.runs, "exp_cost_model: a runs CSV (raylab sweep, or a Slurm-merged one) to fit instead of sweeping");
   try {
     app.parse(argc, argv);
@@ -96,24 +110,139 @@ inline TraceCost trace_cost(const Aggregate& accel, const std::vector<Ray>& rays
   return c;
 }
 
+/// A claim's threshold, stated in docs/theory.md and in its section before any number: the rule
+/// that turns the key number's 95% interval into a verdict (decide_verdict).
+///   below:  the claim predicts key < value;   above: key > value;
+///   within: the claim predicts |key − value| < tolerance (value the target, tolerance δ).
+/// Claims whose verdict is conditional by nature ("holds only under stated conditions") state
+/// their rule in `text` and decide it with decide_conditional.
+struct Threshold {
+  std::string text;       ///< the rule in words, as docs/theory.md states it
+  std::string direction;  ///< below | above | within | conditional
+  double value = std::numeric_limits<double>::quiet_NaN();
+  double tolerance = std::numeric_limits<double>::quiet_NaN();  ///< within: δ
+};
+
+/// The number a verdict is decided from, with its 95% interval and what produced it.
+struct KeyNumber {
+  std::string name;  ///< what it is, e.g. "α of ops/ray ∝ N^α, dust"
+  double value = std::numeric_limits<double>::quiet_NaN();
+  double lo = std::numeric_limits<double>::quiet_NaN();  ///< the 95% interval [lo, hi]
+  double hi = std::numeric_limits<double>::quiet_NaN();
+  long replicates = 0;   ///< the n behind it: points of a fit, or replicate runs
+  std::string spec;      ///< the full spec that produced it, defaults expanded (canonical_spec)
+  std::string interval;  ///< how [lo, hi] was obtained, e.g. "± t(0.975, 10)·s.e. of the Ceres fit"
+};
+
+/// The 95% interval of a fitted parameter from its standard error, on `dof` = points − parameters
+/// degrees of freedom: value ± t(0.975, dof)·s.e. (Student's t; it is 1.96 as dof → ∞). NaN
+/// bounds when the s.e. is not finite or dof < 1.
+inline KeyNumber fitted_key(std::string name, double value, double std_error, std::size_t points, std::size_t parameters,
+                            std::string spec) {
+  KeyNumber k;
+  k.name = std::move(name);
+  k.value = value;
+  k.replicates = static_cast<long>(points);
+  k.spec = std::move(spec);
+  const double dof = static_cast<double>(points) - static_cast<double>(parameters);
+  if (std::isfinite(std_error) && dof >= 1) {
+    const double t = boost::math::quantile(boost::math::students_t(dof), 0.975);
+    k.lo = value - t * std_error;
+    k.hi = value + t * std_error;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "± t(0.975, %g)·s.e. = ± %.3g·s.e. of the fit (%zu points, %zu parameters)", dof,
+                  t, points, parameters);
+    k.interval = buf;
+  } else {
+    k.interval = "no interval: the fit's standard error is undefined";
+  }
+  return k;
+}
+
+/// fitted_key for parameter `index` of `fit`.
+inline KeyNumber fitted_key(std::string name, const FitResult& fit, std::size_t index, std::string spec) {
+  return fitted_key(std::move(name), fit.values[index], fit.std_errors[index], fit.points, fit.values.size(),
+                    std::move(spec));
+}
+
+inline const char* const kConfirmed = "confirmed";
+inline const char* const kRefuted = "refuted";
+inline const char* const kInconclusive = "inconclusive at this noise";
+inline const char* const kConditional = "holds only under stated conditions";
+
+/// The verdict the key number's 95% interval gives under `threshold`: confirmed where the whole
+/// interval lies on the claim's side, refuted where it lies wholly on the other, inconclusive at
+/// this noise where it straddles the threshold (or is undefined).
+inline std::string decide_verdict(const KeyNumber& key, const Threshold& threshold) {
+  if (!(key.lo <= key.hi)) return kInconclusive;
+  const double v = threshold.value;
+  if (threshold.direction == "below") return key.hi < v ? kConfirmed : key.lo > v ? kRefuted : kInconclusive;
+  if (threshold.direction == "above") return key.lo > v ? kConfirmed : key.hi < v ? kRefuted : kInconclusive;
+  if (threshold.direction == "within") {
+    const double d = threshold.tolerance;
+    if (key.lo > v - d && key.hi < v + d) return kConfirmed;
+    return key.lo >= v + d || key.hi <= v - d ? kRefuted : kInconclusive;
+  }
+  throw std::logic_error("decide_verdict: threshold direction '" + threshold.direction + "'");
+}
+
+/// The verdict of a claim that holds on some cases and is stated to fail on others, from the
+/// verdicts (decide_verdict) of the cases where it should hold and of those where it may fail:
+/// confirmed if it holds everywhere, refuted if it holds nowhere it should, holds only under
+/// stated conditions if every case is decided and both kinds occur, inconclusive at this noise
+/// if any case is.
+inline std::string decide_conditional(const std::vector<std::string>& cases) {
+  bool any_confirmed = false, any_refuted = false;
+  for (const auto& c : cases) {
+    if (c == kInconclusive) return kInconclusive;
+    any_confirmed |= c == kConfirmed;
+    any_refuted |= c == kRefuted;
+  }
+  if (any_confirmed && any_refuted) return kConditional;
+  return any_confirmed ? kConfirmed : any_refuted ? kRefuted : kInconclusive;
+}
+
 /// One verdict of the report's summary table. Each experiment writes the verdicts of its section
 /// to <section>.verdicts.csv (write_verdicts); make_report.py gathers every such file into the
-/// table that opens docs/results/README.md and the list that closes it, so neither is edited by
-/// hand.
+/// table that opens docs/results/README.md, the list that closes it and results.json, so none is
+/// edited by hand.
 struct Verdict {
   std::string claim;    ///< "1", "1b", "6a", ...: the order of the summary table
   std::string title;    ///< the claim in a few words
-  std::string verdict;  ///< confirmed | refuted | holds only under stated conditions
-  std::string key;      ///< the key number, with its uncertainty
+  std::string verdict;  ///< confirmed | refuted | inconclusive at this noise | holds only under stated conditions
+  std::string key;      ///< the key number, with its uncertainty, in words
   std::string anchor;   ///< the id of the section's HTML anchor (section_anchor)
+  KeyNumber number = {};       ///< the key number the verdict is decided from
+  Threshold threshold = {};    ///< the rule, stated before the measurement
+  std::string command = {};    ///< the command that reproduces this claim alone
 };
 
 /// The line that opens a section with an anchor the summary table links to.
 inline std::string section_anchor(const std::string& id) { return "<a id=\"" + id + "\"></a>\n\n"; }
 
-/// The paragraph that states a claim's verdict at the end of its section.
+/// "0.152 [0.115, 0.189]" with `digits` significant digits.
+inline std::string interval_text(const KeyNumber& k, int digits = 3) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "%.*g (95%% interval [%.*g, %.*g], n = %ld)", digits, k.value, digits, k.lo, digits,
+                k.hi, k.replicates);
+  return buf;
+}
+
+/// The paragraph that states a claim's threshold, before any of its numbers, with the command
+/// that reproduces the claim.
+inline std::string threshold_paragraph(const Verdict& v) {
+  std::string p = "**Threshold (claim " + v.claim + "), stated before measuring:** " + v.threshold.text + "\n\n";
+  if (!v.command.empty()) p += "Reproduce: `" + v.command + "`\n\n";
+  return p;
+}
+
+/// The paragraph that states a claim's verdict at the end of its section, opened by the anchor
+/// `verdict-<claim>` that the summary table links to.
 inline std::string verdict_paragraph(const Verdict& v, const std::string& reason) {
-  return "**Verdict (claim " + v.claim + "): " + v.verdict + ".** " + v.key + ". " + reason + "\n\n";
+  std::string p = "<a id=\"verdict-" + v.claim + "\"></a>**Verdict (claim " + v.claim + "): " + v.verdict + ".** " + v.key + ".";
+  if (!v.number.name.empty())
+    p += " Key number: " + v.number.name + " = " + interval_text(v.number) + (v.number.spec.empty() ? "" : ", spec `" + v.number.spec + "`") + ".";
+  return p + " " + reason + "\n\n";
 }
 
 inline double seconds_of(const std::function<void()>& f) {
@@ -160,9 +289,17 @@ class CsvWriter {
 };
 
 /// Writes `verdicts` to OUT/<section>.verdicts.csv (replacing an earlier run's).
+/// The first five columns are the summary table's; the rest are the structured key number and
+/// threshold that results.json carries (make_report.py).
 inline void write_verdicts(const std::string& out_dir, const std::string& section, const std::vector<Verdict>& verdicts) {
-  CsvWriter csv(out_dir + "/" + section + ".verdicts.csv", {"claim", "title", "verdict", "key", "anchor"});
-  for (const auto& v : verdicts) csv.row(v.claim, v.title, v.verdict, v.key, v.anchor);
+  CsvWriter csv(out_dir + "/" + section + ".verdicts.csv",
+                {"claim", "title", "verdict", "key", "anchor", "key_name", "key_value", "ci95_lo", "ci95_hi",
+                 "replicates", "spec", "interval", "threshold", "threshold_direction", "threshold_value",
+                 "threshold_tolerance", "command"});
+  for (const auto& v : verdicts)
+    csv.row(v.claim, v.title, v.verdict, v.key, v.anchor, v.number.name, v.number.value, v.number.lo, v.number.hi,
+            v.number.replicates, v.number.spec, v.number.interval, v.threshold.text, v.threshold.direction,
+            v.threshold.value, v.threshold.tolerance, v.command);
 }
 
 /// Fitted curves for the plots: each experiment writes its fits to <name>_fits.csv, one row per

@@ -288,6 +288,31 @@ std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared
   return accel;
 }
 
+std::string canonical_spec(const std::string& spec) {
+  SpecReader reader(parse_spec(spec));
+  const AccelKind& kind = find_accelerator_kind(reader.spec().name);
+  reader.reject_unknown_keys(kind.params);
+  const auto wrapped = [](const std::string& v) {
+    const bool bare = v.empty() || v.find_first_of(",: ") == std::string::npos || (v.front() == '(' && v.back() == ')');
+    return bare ? v : "(" + v + ")";
+  };
+  std::string out = kind.name;
+  char sep = ':';
+  for (const auto& p : reader.spec().positional) {
+    out += sep + wrapped(p);
+    sep = ',';
+  }
+  for (const auto& doc : kind.params) {
+    std::string value = doc.default_value;
+    for (const auto& [key, given] : reader.spec().params)
+      if (key == doc.key) value = given;
+    if (value.empty()) continue;
+    out += sep + doc.key + "=" + wrapped(value);
+    sep = ',';
+  }
+  return out;
+}
+
 AccuracyBound accuracy_bound(const std::string& spec) {
   SpecReader reader(parse_spec(spec));
   const AccelKind& kind = find_accelerator_kind(reader.spec().name);

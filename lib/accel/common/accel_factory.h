@@ -123,4 +123,12 @@ std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared
 /// The accuracy bound for `spec`.
 AccuracyBound accuracy_bound(const std::string& spec);
 
+/// `spec` with every parameter of its kind written out, in the kind's documented order, the given
+/// value or else the default (ParamDoc::default_value): `kdtree` → `kdtree:builder=sah,sweep=events,
+/// ...`. The report names each key number's spec this way, so that a changed default shows up as a
+/// changed spec. A value with commas, colons or spaces is wrapped in parentheses; a default that
+/// depends on other parameters is written as its documentation, e.g. `leaf_size=(4 (width=2), ...)`.
+/// Throws InputError for an unknown name or key.
+std::string canonical_spec(const std::string& spec);
+
 }  // namespace raylab
