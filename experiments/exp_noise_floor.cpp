@@ -39,14 +39,14 @@ int main(int argc, char** argv) {
     ReplicateOptions ro;
     ro.rounds = rounds;
     const ReplicateTiming t = time_replicates({ours.get(), theirs.get()}, rays, ro);
-    const Interval ns = t.ns_per_ray(0), embree_ns = t.ns_per_ray(1), ratio = t.ratio(1, 0);
+    const IntervalEstimate ns = t.ns_per_ray(0), embree_ns = t.ns_per_ray(1), ratio = t.ratio(1, 0);
     const double cv_ns = coefficient_of_variation(t.ns[0]), cv_embree_ns = coefficient_of_variation(t.ns[1]);
     const double cv_ratio = coefficient_of_variation(t.ratios(1, 0));
     const std::string spec = fmt::format("ours={} theirs={} scene={} rays={} threads=1 timer=thread_cpu "
                                          "rounds={} passes_per_round=1",
-                                         kOurs, kTheirs, kScene, kRays, rounds);
+                                         canonical_spec(kOurs), canonical_spec(kTheirs), kScene, kRays, rounds);
     const nlohmann::json j = {
-        {"spec", spec},
+        {"spec", spec},  // defaults expanded: a changed default shows up as a changed spec
         {"ours", kOurs},
         {"theirs", kTheirs},
         {"scene", kScene},

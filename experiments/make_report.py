@@ -25,6 +25,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).parent))  # figures.py, shared by 
 # Fragments in reading order; any other *.md fragment follows alphabetically.
 ORDER = ["image_log_objects", "oracle_agreement", "grids", "spatial", "surface_area", "crofton", "bvh",
          "ray_shooting_bounds", "speed_accuracy", "cost_model", "robustness"]
+ORDER.insert(0, "noise_floor")  # exp_noise_floor's fragment: the report opens with this machine's noise floor
 
 
 def claim_key(claim: str):

@@ -26,7 +26,7 @@ TEST(Replicates, MedianAndCoefficientOfVariation) {
 TEST(Replicates, BootstrapMedianIntervalHoldsTheMedianAndWidensWithTheSpread) {
   const std::vector<double> tight = {1.00, 1.01, 0.99, 1.02, 0.98, 1.00, 1.01};
   const std::vector<double> loose = {1.00, 1.30, 0.70, 1.40, 0.60, 1.00, 1.20};
-  const Interval a = bootstrap_median(tight), b = bootstrap_median(loose);
+  const IntervalEstimate a = bootstrap_median(tight), b = bootstrap_median(loose);
   EXPECT_DOUBLE_EQ(a.value, 1.00);
   EXPECT_EQ(a.replicates, 7);
   EXPECT_LE(a.lo, a.value);
@@ -35,10 +35,10 @@ TEST(Replicates, BootstrapMedianIntervalHoldsTheMedianAndWidensWithTheSpread) {
   EXPECT_LE(a.hi, 1.02);
   EXPECT_GT(b.hi - b.lo, 5 * (a.hi - a.lo));
   // The seed is fixed: the same data give the same interval.
-  const Interval again = bootstrap_median(loose);
+  const IntervalEstimate again = bootstrap_median(loose);
   EXPECT_EQ(again.lo, b.lo);
   EXPECT_EQ(again.hi, b.hi);
-  const Interval constant = bootstrap_median({2, 2, 2, 2, 2});
+  const IntervalEstimate constant = bootstrap_median({2, 2, 2, 2, 2});
   EXPECT_EQ(constant.lo, 2.0);
   EXPECT_EQ(constant.hi, 2.0);
   EXPECT_THROW(bootstrap_median({}), std::invalid_argument);
@@ -87,7 +87,7 @@ TEST(Replicates, TimeReplicatesGivesOneTimePerContenderAndRound) {
   EXPECT_TRUE(t.thread_cpu);
   for (const auto& c : t.ns)
     for (double ns : c) EXPECT_GT(ns, 0.0);
-  const Interval r = t.ratio(1, 0);
+  const IntervalEstimate r = t.ratio(1, 0);
   EXPECT_EQ(r.replicates, 5);
   EXPECT_LE(r.lo, r.value);
   EXPECT_GE(r.hi, r.value);

@@ -20,9 +20,9 @@ double quantile_of_sorted(const std::vector<double>& v, double q) {
   return v[i] + (pos - static_cast<double>(i)) * (v[j] - v[i]);
 }
 
-Interval percentile_interval(double value, std::vector<double> resampled, int replicates) {
+IntervalEstimate percentile_interval(double value, std::vector<double> resampled, int replicates) {
   std::sort(resampled.begin(), resampled.end());
-  Interval out;
+  IntervalEstimate out;
   out.value = value;
   out.lo = quantile_of_sorted(resampled, 0.025);
   out.hi = quantile_of_sorted(resampled, 0.975);
@@ -50,7 +50,7 @@ double coefficient_of_variation(const std::vector<double>& values) {
   return std::sqrt(ss / static_cast<double>(values.size() - 1)) / std::abs(mean);
 }
 
-Interval bootstrap_median(const std::vector<double>& values, int resamples, std::uint64_t seed) {
+IntervalEstimate bootstrap_median(const std::vector<double>& values, int resamples, std::uint64_t seed) {
   if (values.empty()) throw std::invalid_argument("bootstrap_median: no values");
   if (resamples < 1) throw std::invalid_argument("bootstrap_median: resamples must be positive");
   std::mt19937_64 rng(seed);
@@ -140,7 +140,7 @@ ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders,
   return t;
 }
 
-std::string format_interval(const Interval& i, int digits) {
+std::string format_interval(const IntervalEstimate& i, int digits) {
   char buf[128];
   std::snprintf(buf, sizeof buf, "%.*g [%.*g, %.*g]", digits, i.value, digits, i.lo, digits, i.hi);
   return buf;

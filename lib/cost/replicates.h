@@ -35,7 +35,7 @@ inline constexpr int kBootstrapResamples = 2000;
 inline constexpr std::uint64_t kBootstrapSeed = 20261204;
 
 /// A figure from replicates: the point value, its 95% interval [lo, hi] and the replicates behind it.
-struct Interval {
+struct IntervalEstimate {
   double value = std::numeric_limits<double>::quiet_NaN();
   double lo = std::numeric_limits<double>::quiet_NaN();
   double hi = std::numeric_limits<double>::quiet_NaN();
@@ -52,7 +52,7 @@ double coefficient_of_variation(const std::vector<double>& values);
 
 /// The median of `values` with its percentile-bootstrap 95% interval. Throws std::invalid_argument
 /// for no values or a non-positive resample count.
-Interval bootstrap_median(const std::vector<double>& values, int resamples = kBootstrapResamples,
+IntervalEstimate bootstrap_median(const std::vector<double>& values, int resamples = kBootstrapResamples,
                           std::uint64_t seed = kBootstrapSeed);
 
 /// Parameters fitted to replicated points, with percentile-bootstrap 95% intervals.
@@ -60,10 +60,10 @@ Interval bootstrap_median(const std::vector<double>& values, int resamples = kBo
 /// per point to the parameters (always the same count). The values are fit(medians); each
 /// resample draws every point's replicates with replacement, takes their medians and refits.
 /// Resamples whose fit gives a non-finite parameter are left out of that parameter's quantiles
-/// (`finite_fraction` says how many were kept); every Interval's `replicates` is the smallest
+/// (`finite_fraction` says how many were kept); every IntervalEstimate's `replicates` is the smallest
 /// replicate count over the points.
 struct BootstrapFit {
-  std::vector<Interval> parameters;
+  std::vector<IntervalEstimate> parameters;
   std::vector<double> finite_fraction;  ///< per parameter: resamples with a finite value / resamples
 };
 BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
@@ -86,8 +86,8 @@ struct ReplicateTiming {
   /// ns[numerator][r] / ns[denominator][r] for every round r: with Embree's time over ours, the
   /// throughput relative to Embree (> 1: ours is faster).
   std::vector<double> ratios(std::size_t numerator, std::size_t denominator) const;
-  Interval ns_per_ray(std::size_t contender) const { return bootstrap_median(ns.at(contender)); }
-  Interval ratio(std::size_t numerator, std::size_t denominator) const {
+  IntervalEstimate ns_per_ray(std::size_t contender) const { return bootstrap_median(ns.at(contender)); }
+  IntervalEstimate ratio(std::size_t numerator, std::size_t denominator) const {
     return bootstrap_median(ratios(numerator, denominator));
   }
 };
@@ -102,6 +102,6 @@ ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders,
 std::vector<std::vector<double>> alternate_rounds(const std::vector<std::function<double()>>& measure, int rounds);
 
 /// "1.23 [1.10, 1.31]" with `digits` significant digits.
-std::string format_interval(const Interval& i, int digits = 3);
+std::string format_interval(const IntervalEstimate& i, int digits = 3);
 
 }  // namespace raylab
