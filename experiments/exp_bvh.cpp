@@ -111,7 +111,9 @@ BuildPair best_builds(const std::string& ours, const std::string& theirs, const 
 }
 
 /// Replicate rounds of every timing (lib/cost/replicates.h); full mode takes more.
-int rounds_of(const Options& opt) { return opt.full() ? 7 : 5; }
+int rounds_of(const Options& opt) { return opt.full() ? 9 : 7; }
+/// Alternated builds of each builder (their medians and intervals) in the comparison with Embree.
+int build_rounds_of(const Options& opt) { return opt.full() ? 7 : 5; }
 
 struct Trace {
   double ns = 0, embree_ns = 0;
@@ -326,7 +328,7 @@ std::string bvh_versus_kdtree(Runner& run, const Options& opt, std::vector<Verdi
   std::string scene_list;
   for (const auto& sc : scenes) scene_list += (scene_list.empty() ? "" : ", ") + sc;
   const KeyNumber key = fitted_key("kd-tree tests per ray / BVH tests per ray, one constant over the scenes", ratio, 0,
-                                   fmt::format("`{}` against `{}` on {}, `{}` rays", canonical_spec("kdtree"),
+                                   fmt::format("{} against {} on {}, {} rays", canonical_spec("kdtree"),
                                                canonical_spec("bvh:width=2"), scene_list, rays));
   const Threshold rule{"the 95% interval of the kd-tree's tests per ray over the BVH's lies above 1", "above", 1.0};
   md += fmt::format("Tests per ray, kd-tree over BVH, fitted as one constant over the {} scenes (Ceres, relative "
@@ -462,14 +464,14 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
   const IntervalEstimate bvh_ba = boot.parameters[0], sbvh_ba = boot.parameters[1], recovery = boot.parameters[2];
   const std::string how = "95% percentile bootstrap: each angle's rounds resampled, the medians refitted (2000 resamples, "
                           "fixed seed)";
-  const std::string walls_spec = fmt::format("walls:n=400,angle=θ for θ in {}…{}°, `{}` rays, single-thread CPU time, {} "
+  const std::string walls_spec = fmt::format("walls:n=400,angle=θ for θ in {}…{}°, {} rays, single-thread CPU time, {} "
                                              "rounds per angle",
                                              angles.front(), angles.back(), rays, rounds_of(opt));
   const KeyNumber slows = replicated_key("b/a of `bvh`, ns/ray = a + b·g(θ)", bvh_ba,
-                                         "`" + canonical_spec("bvh") + "` on " + walls_spec, how);
+                                         canonical_spec("bvh") + " on " + walls_spec, how);
   const KeyNumber recovers = replicated_key(
       "b(`bvh`) − b(`bvh:builder=spatial`) (ns per unit of box growth)", recovery,
-      "`" + canonical_spec("bvh") + "` and `" + canonical_spec("bvh:builder=spatial") + "` on " + walls_spec, how);
+      canonical_spec("bvh") + " and " + canonical_spec("bvh:builder=spatial") + " on " + walls_spec, how);
   const std::string slows_v = decide_verdict(slows, Threshold{"b/a of `bvh` above 0", "above", 0.0});
   const std::string recovers_v = decide_verdict(recovers, Threshold{"b(bvh) − b(SBVH) above 0", "above", 0.0});
   const std::string verdict = slows_v == kInconclusive || recovers_v == kInconclusive ? kInconclusive
@@ -529,7 +531,7 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
         "a + b·log10 N over the scene sizes; the claim is confirmed when the 95% interval of b lies above 0 (the "
         "share grows with N), refuted when it lies below 0, inconclusive at this noise when it contains 0. The "
         "interval is a percentile bootstrap over the replicate rounds of each scene's trace time (2000 resamples, "
-        "fixed seed). The traversal share is a bound: the triangle share is min(1, tests × ns per test / ns per ray) "
+        "fixed seed; absolute residuals, as a clamped share of 0 has no relative error). The traversal share is a bound: the triangle share is min(1, tests × ns per test / ns per ray) "
         "with the test cost measured cache-warm, a lower bound, so the traversal share (the rest) is an upper bound; "
         "a share of 0% means the clamp was hit, i.e. the cache-warm test cost times the tests exceeds the trace "
         "time.\n\n";
@@ -596,22 +598,21 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
     fits["bvh"] = none;
   }
   const FitResult& fb = fits["bvh"];
-  // b's interval: every scene's rounds resampled, the shares refitted; a resample with a share of 0
-  // (the clamp) cannot be fitted with relative residuals and gives NaN, left out of the quantiles.
+  // b's interval: every scene's rounds resampled, the shares refitted. Absolute residuals (a share
+  // is a fraction, and a clamped share of 0 has no relative error), Huber loss at 0.1 of a share.
   const auto& sizes = share_fit["bvh"].first;
   const BootstrapFit boot = bootstrap_fit(share_rounds["bvh"], [&](const std::vector<double>& share) {
-    if (*std::min_element(share.begin(), share.end()) <= 0) return std::vector<double>{std::nan("")};
-    return std::vector<double>{fit_basis(sizes, share, [](double n) { return std::log10(n); }).values[1]};
+    return std::vector<double>{
+        fit_basis(sizes, share, [](double n) { return std::log10(n); }, ResidualKind::absolute).values[1]};
   });
   std::string scene_list;
   for (const auto& sc : scenes) scene_list += (scene_list.empty() ? "" : ", ") + sc;
   const KeyNumber key = replicated_key(
       "b of the `bvh` traversal share (an upper bound) = a + b·log10 N, per decade of N", boot.parameters[0],
-      fmt::format("`{}` on {}, `{}` rays, single-thread CPU time, {} rounds per scene", canonical_spec("bvh"), scene_list,
+      fmt::format("{} on {}, {} rays, single-thread CPU time, {} rounds per scene", canonical_spec("bvh"), scene_list,
                   rays, rounds_of(opt)),
-      fmt::format("95% percentile bootstrap: each scene's rounds resampled, the shares refitted (2000 resamples, fixed "
-                  "seed; {:.0f}% of resamples had no clamped share and were kept)",
-                  100 * boot.finite_fraction[0]));
+      "95% percentile bootstrap: each scene's rounds resampled, the shares refitted with absolute residuals (2000 "
+      "resamples, fixed seed)");
   const Threshold rule{"the 95% interval of b, the slope of the BVH's traversal share per decade of N, lies above 0",
                        "above", 0.0};
   verdicts.push_back({"7c", "traversal's share of the time grows with the scene (lecture: 73% → 85%)",
@@ -679,7 +680,7 @@ std::string against_embree(Runner& run, const Options& opt) {
                     "so its time includes "
                     "first-touch page faults; `build/experiments/bench_bvh_build` gives the same comparison with "
                     "page-fault and CPU-time counters):\n\n",
-                    rounds_of(opt));
+                    build_rounds_of(opt));
   md += "| scene | triangles | `bvh` 1 thr | Embree medium 1 thr | `bvh` 2 thr | Embree medium 2 thr | "
         "`bvh:builder=spatial` 2 thr | Embree high 2 thr | bytes/tri `bvh` | bytes/tri Embree | builds |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
@@ -711,7 +712,7 @@ std::string against_embree(Runner& run, const Options& opt) {
                                                 "shadow:" + n + camera};
     IntervalEstimate b1, e1, b2, e2, sb2, eh2;
     std::size_t bvh_bytes = 0, embree_bytes = 0;
-    const int repeats = rounds_of(opt);
+    const int repeats = build_rounds_of(opt);
     for (int threads : {1, 2}) {
       const BuildPair p = best_builds("bvh:threads=" + std::to_string(threads), "embree", scene, threads, repeats);
       (threads == 1 ? b1 : b2) = p.ours_ci;
@@ -739,7 +740,7 @@ std::string against_embree(Runner& run, const Options& opt) {
     std::vector<std::unique_ptr<Aggregate>> built;
     for (const auto& a : accels) built.push_back(build(a, scene, 0).first);
     const auto embree_fast = build("embree", scene, 0).first, embree_robust = build("embree-robust", scene, 0).first;
-    std::vector<const Aggregate*> timed;
+    std::vector<const Primitive*> timed;
     for (const auto& b : built) timed.push_back(b.get());
     timed.push_back(embree_fast.get());
     timed.push_back(embree_robust.get());

@@ -366,8 +366,7 @@ class CostModelExperiment {
           return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
         };
         md += fmt::format(
-            "
-Held-out MAPE over all rows with its 95% interval, a percentile bootstrap over the {} held-out scenes "
+            "\nHeld-out MAPE over all rows with its 95% interval, a percentile bootstrap over the {} held-out scenes "
             "(scenes drawn with replacement, {} resamples, fixed seed): counters model {} [{}, {}], tree model {} "
             "[{}, {}]. The times are the sweep's (lib/cost/timing.h: the fastest of alternated passes), so the "
             "interval is that of the choice of scenes, not of rerunning the timings.\n",

@@ -326,16 +326,17 @@ int main(int argc, char** argv) {
           const double rel = (c1 > 0 && c2 > 0) ? std::hypot(f.std_errors[1] / c1, f.std_errors[2] / c2) / 3 : 0.0;
           const BootstrapFit boot = bootstrap_fit(reps, optimum);
           const IntervalEstimate d_star = boot.parameters[0], at3 = boot.parameters[1];
+          const std::string at3_text = fmt::format("{:.3f} [{:.3f}, {:.3f}]", at3.value, at3.lo, at3.hi);
           dfit.row(c.label, f.values[0], f.std_errors[0], c1, f.std_errors[1], c2, f.std_errors[2], d_star.value,
                    d_star.value * rel, d_star.lo, d_star.hi, at3.value, at3.lo, at3.hi, at3.replicates);
           md += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c.label, format_with_error(f.values[0], f.std_errors[0]),
                             format_with_error(c1, f.std_errors[1]), format_with_error(c2, f.std_errors[2]),
-                            format_interval(d_star), format_interval(at3), at3.replicates);
+                            format_interval(d_star), at3_text, at3.replicates);
           const std::string v = decide_verdict(replicated_key("", at3, ""), rule_6a);
           scene_verdicts.push_back(v);
           scene_at3.push_back(at3);
           const std::string text =
-              fmt::format("{} t(3)/t(d*) = {}, d* = {}", c.label, format_interval(at3), format_interval(d_star));
+              fmt::format("{} t(3)/t(d*) = {}, d* = {}", c.label, at3_text, format_interval(d_star));
           (v == "confirmed" ? d_holds : v == "refuted" ? d_fails : d_open).push_back(text);
         }
       }
@@ -351,7 +352,7 @@ int main(int argc, char** argv) {
                           "claim-6",
                           replicated_key("t(3)/t(d*) on " + cases[0].label + " (the scene of uniform density)",
                                          scene_at3[0],
-                                         fmt::format("`{}` for d in 0.5…8 on `{}`, `{}` rays, single-thread CPU time, {} "
+                                         fmt::format("{} for d in 0.5…8 on {}, {} rays, single-thread CPU time, {} "
                                                      "rounds per d",
                                                      canonical_spec("grid:d=3"), cases[0].spec, ray_spec, kRounds),
                                          "95% percentile bootstrap: each d's rounds resampled, the medians refitted "
@@ -485,7 +486,7 @@ int main(int argc, char** argv) {
                                                   "the object",
                                                   object, ratios.front(), kFitUpTo, teapot_rays.size());
       const auto alpha_key = [&](const std::string& a) {
-        return fitted_key("α of ops/ray ∝ R^α, `" + a + "`", alpha[a], 1, "`" + canonical_spec(a) + "` on " + teapot_spec);
+        return fitted_key("α of ops/ray ∝ R^α, `" + a + "`", alpha[a], 1, canonical_spec(a) + " on " + teapot_spec);
       };
       const KeyNumber kg = alpha_key("grid"), kng = alpha_key("nested-grid"),
                       ktl = alpha_key("nested-grid:mode=two-level");
