@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <random>
 #include <set>
 
 #include "accel/common/accel_factory.h"
@@ -30,6 +31,7 @@
 #include "cost/auto_accel.h"
 #include "cost/model_file.h"
 #include "cost/model_fit.h"
+#include "cost/replicates.h"
 #include "cost/sweep.h"
 #include "experiment_common.h"
 #include "scene/scene_spec.h"
@@ -90,17 +92,6 @@ SahBaseline fit_sah_baseline(double ratio, const std::vector<RunRecord>& runs, c
     b.coefficients[f] = fit_linear_terms(x, y).values;
   }
   return b;
-}
-
-/// Best single-threaded ns per ray of each of `accels` on `rays`, their passes in rotation.
-std::vector<double> rotated_best_ns(const std::vector<const Aggregate*>& accels, const std::vector<Ray>& rays, bool any_hit,
-                                    int rounds) {
-  std::vector<double> best(accels.size(), INFINITY);
-  for (int round = 0; round < rounds; ++round)
-    for (std::size_t i = 0; i < accels.size(); ++i)
-      best[i] = std::min(best[i], trace_rays(*accels[i], rays, TraceOptions{1, false, any_hit}).seconds);
-  for (double& b : best) b = b / static_cast<double>(rays.size()) * 1e9;
-  return best;
 }
 
 std::string pct(double fraction) { return fmt::format("{:.1f}%", 100 * fraction); }
@@ -298,9 +289,14 @@ class CostModelExperiment {
       const auto r80 = make_accelerator(base + ":c_trav=1,c_isect=80", sc);
       const auto r15 = make_accelerator(base + ":c_trav=1,c_isect=1.5", sc);
       for (const std::string& kind : kRayKinds) {
-        const auto best = rotated_best_ns({fitted.get(), r80.get(), r15.get()}, rays.at(kind), is_any_hit_ray_spec(kind),
-                                          opt_.full() ? 20 : 10);
-        builder_rows_.push_back({s, kind, base, best[0], best[1], best[2]});
+        ReplicateOptions o;
+        o.rounds = opt_.full() ? 20 : 10;
+        o.any_hit = is_any_hit_ray_spec(kind);
+        const ReplicateTiming t = time_replicates({fitted.get(), r80.get(), r15.get()}, rays.at(kind), o);
+        std::vector<double> speedup;  // the faster textbook tree's time over the fitted tree's, per round
+        for (int r = 0; r < t.rounds(); ++r) speedup.push_back(std::min(t.ns[1][r], t.ns[2][r]) / t.ns[0][r]);
+        builder_rows_.push_back({s, kind, base, median(t.ns[0]), median(t.ns[1]), median(t.ns[2]),
+                                 bootstrap_median(speedup)});
       }
     }
   }
@@ -347,6 +343,50 @@ class CostModelExperiment {
     };
     for (const auto& [f, s] : by_family) md += line("`" + f + "`", s);
     md += line("all", all);
+    {
+      // The held-out MAPE's 95% interval: a percentile bootstrap over the held-out scenes (scenes drawn
+      // with replacement, every row of a drawn scene kept, 2000 resamples, fixed seed), the spread
+      // another choice of held-out scenes of the same kind would give.
+      std::map<std::string, Scores> by_scene;
+      for (const auto& [key, sc] : by_scene_rays) {
+        Scores& t = by_scene[key.first];
+        t.measured.insert(t.measured.end(), sc.measured.begin(), sc.measured.end());
+        t.counters.insert(t.counters.end(), sc.counters.begin(), sc.counters.end());
+        t.tree.insert(t.tree.end(), sc.tree.begin(), sc.tree.end());
+      }
+      std::vector<const Scores*> scenes;
+      for (const auto& [name, sc] : by_scene) scenes.push_back(&sc);
+      if (!scenes.empty()) {
+        std::mt19937_64 rng(kBootstrapSeed);
+        std::uniform_int_distribution<std::size_t> pick(0, scenes.size() - 1);
+        std::vector<double> counters_mape, tree_mape;
+        for (int b = 0; b < kBootstrapResamples; ++b) {
+          Scores draw;
+          for (std::size_t i = 0; i < scenes.size(); ++i) {
+            const Scores& sc = *scenes[pick(rng)];
+            draw.measured.insert(draw.measured.end(), sc.measured.begin(), sc.measured.end());
+            draw.counters.insert(draw.counters.end(), sc.counters.begin(), sc.counters.end());
+            draw.tree.insert(draw.tree.end(), sc.tree.begin(), sc.tree.end());
+          }
+          counters_mape.push_back(mean_absolute_percentage_error(draw.counters, draw.measured));
+          tree_mape.push_back(mean_absolute_percentage_error(draw.tree, draw.measured));
+        }
+        std::sort(counters_mape.begin(), counters_mape.end());
+        std::sort(tree_mape.begin(), tree_mape.end());
+        const auto q = [](const std::vector<double>& v, double p) {
+          return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
+        };
+        md += fmt::format(
+            "\nHeld-out MAPE over all rows with its 95% interval, a percentile bootstrap over the {} held-out scenes "
+            "(scenes drawn with replacement, {} resamples, fixed seed): counters model {} [{}, {}], tree model {} "
+            "[{}, {}]. The times are the sweep's (lib/cost/timing.h: the fastest of alternated passes), so the "
+            "interval is that of the choice of scenes, not of rerunning the timings.\n",
+            scenes.size(), kBootstrapResamples, pct(mean_absolute_percentage_error(all.counters, all.measured)),
+            pct(q(counters_mape, 0.025)), pct(q(counters_mape, 0.975)),
+            pct(mean_absolute_percentage_error(all.tree, all.measured)), pct(q(tree_mape, 0.025)),
+            pct(q(tree_mape, 0.975)));
+      }
+    }
     // Spearman among the trees of one scene (one ray kind): does the model rank them as measured?
     std::vector<double> rho_tree, rho_80, rho_15;
     for (const auto& [key, s] : by_scene_rays) {
@@ -374,16 +414,19 @@ class CostModelExperiment {
   std::string builders_section() {
     std::string md =
         "### Trees built from the fitted model\n\n`cost=cost_model.json` against the lecture's ratios "
-        "(`c_trav=1,c_isect=80` and `c_isect=1.5`) on the held-out scenes: ns per ray, best of alternating "
-        "passes of the three trees; *speed-up* is the faster textbook tree's time over the fitted tree's (goal: "
-        "≥ 0.98 on every scene).\n\n| scene | rays | structure | cost=model | 1:80 | 1:1.5 | speed-up |\n"
-        "|---|---|---|---|---|---|---|\n";
+        "(`c_trav=1,c_isect=80` and `c_isect=1.5`) on the held-out scenes: ns per ray, median of " +
+        std::to_string(opt_.full() ? 20 : 10) + " replicate rounds, each tracing the three trees in turn (the "
+        "tracing thread's CPU time); *speed-up* is the faster textbook tree's time over the fitted tree's in each "
+        "round, median [95% bootstrap interval] (goal: ≥ 0.98 on every scene).\n\n"
+        "| scene | rays | structure | cost=model | 1:80 | 1:1.5 | speed-up [95%] | rounds |\n"
+        "|---|---|---|---|---|---|---|---|\n";
     std::map<std::string, std::vector<double>> speedups;
     for (const BuilderRow& b : builder_rows_) {
-      const double speedup = std::min(b.ns_80, b.ns_15) / b.ns_cost;
+      const double speedup = b.speedup.value;
       speedups[b.structure].push_back(speedup);
-      md += fmt::format("| {} | {} | `{}` | {:.0f} | {:.0f} | {:.0f} | {:.2f} |\n", b.scene, b.kind, b.structure, b.ns_cost,
-                        b.ns_80, b.ns_15, speedup);
+      md += fmt::format("| {} | {} | `{}` | {:.0f} | {:.0f} | {:.0f} | {:.2f} [{:.2f}, {:.2f}] | {} |\n", b.scene, b.kind,
+                        b.structure, b.ns_cost, b.ns_80, b.ns_15, speedup, b.speedup.lo, b.speedup.hi,
+                        b.speedup.replicates);
       csv_.row("builders", b.structure, "", "", 0.0, 0.0, b.scene, b.kind, b.structure, b.ns_cost, b.ns_80, b.ns_15, 0.0,
                0.0);
     }
@@ -492,7 +535,8 @@ class CostModelExperiment {
 
   struct BuilderRow {
     std::string scene, kind, structure;
-    double ns_cost, ns_80, ns_15;
+    double ns_cost, ns_80, ns_15;  ///< medians over the replicate rounds
+    IntervalEstimate speedup;               ///< per round, min(ns_80, ns_15) / ns_cost: median, 95% bootstrap interval
   };
 
   Options opt_;

@@ -40,7 +40,12 @@ def plot(out: pathlib.Path) -> None:
         cmap = plt.get_cmap("tab10")
         for i, (accel, g) in enumerate(w.groupby("accel", sort=False)):
             g = g.assign(angle=g["param"].astype(float)).sort_values("angle")
-            ax.plot(g["angle"], g["ns_per_ray"], marker="o", linestyle="none", color=cmap(i), label=accel)
+            if "ns_per_ray_lo" in g:  # medians of replicate rounds with their 95% intervals
+                ns = g["ns_per_ray"].to_numpy(float)
+                ax.errorbar(g["angle"], ns, yerr=[ns - g["ns_per_ray_lo"].to_numpy(float), g["ns_per_ray_hi"].to_numpy(float) - ns],
+                            marker="o", linestyle="none", capsize=2, color=cmap(i), label=f"{accel} (median, 95% interval)")
+            else:
+                ax.plot(g["angle"], g["ns_per_ray"], marker="o", linestyle="none", color=cmap(i), label=accel)
             if curves is not None:
                 c = curves[curves["accel"] == accel]
                 ax.plot(c["angle"], c["fitted_ns_per_ray"], color=cmap(i), linewidth=1,

@@ -24,14 +24,23 @@ def plot(out: pathlib.Path) -> None:
         fig, (ax_t, ax_n) = plt.subplots(1, 2, figsize=(13, 4.8))
         for scene, g in res.groupby("scene"):
             g = g.sort_values("d")
-            line, = ax_t.plot(g["d"], g["ratio_to_embree"], marker="o", linestyle="none", label=scene)
+            if "ns_per_ray_lo" in g:  # medians of replicate rounds: the interval of ns/ray, over Embree's median
+                r = g["ratio_to_embree"].to_numpy(float)
+                e = g["embree_ns_per_ray"].to_numpy(float)
+                line = ax_t.errorbar(g["d"], r, yerr=[r - g["ns_per_ray_lo"].to_numpy(float) / e,
+                                                      g["ns_per_ray_hi"].to_numpy(float) / e - r],
+                                     marker="o", linestyle="none", capsize=2, label=f"{scene} (median, 95% interval)").lines[0]
+            else:
+                line, = ax_t.plot(g["d"], g["ratio_to_embree"], marker="o", linestyle="none", label=scene)
             f = None if dfit is None else dfit[dfit["scene"] == scene]
             if f is not None and not f.empty:
                 f = f.iloc[0]
                 d = np.geomspace(g["d"].min(), g["d"].max(), 60)
                 model = (f["c0"] + f["c1"] * d + f["c2"] / d ** 2) / g["embree_ns_per_ray"].iloc[0]
                 ax_t.plot(d, model, color=line.get_color(), linewidth=1,
-                          label=f"{scene}: fit c0 + c1·d + c2/d², d* = {f['d_star']:.2f} ± {f['d_star_se']:.2f}")
+                          label=(f"{scene}: fit c0 + c1·d + c2/d², d* = {f['d_star']:.2f} [{f['d_star_lo']:.2f}, "
+                                 f"{f['d_star_hi']:.2f}]" if "d_star_lo" in f else
+                                 f"{scene}: fit c0 + c1·d + c2/d², d* = {f['d_star']:.2f} ± {f['d_star_se']:.2f}"))
             ax_n.plot(g["d"], g["prim_tests_per_ray"], marker="o", color=line.get_color(), label=f"{scene}: tests")
             ax_n.plot(g["d"], g["cells_per_ray"], marker="x", linestyle="--", color=line.get_color(),
                       label=f"{scene}: cells")

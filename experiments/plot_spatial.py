@@ -59,7 +59,12 @@ def plot(out: pathlib.Path) -> None:
             g = g.sort_values("triangles")
             n = g["triangles"].to_numpy(float)
             t = g["build_s"].to_numpy(float)
-            line, = ax.plot(n, t, marker="o", linestyle="none", label=f"sweep={sweep}")
+            if "build_s_lo" in g and (g["build_s_hi"] > 0).all():  # medians of replicate rounds: 95% intervals
+                err = [t - g["build_s_lo"].to_numpy(float), g["build_s_hi"].to_numpy(float) - t]
+                line = ax.errorbar(n, t, yerr=err, marker="o", linestyle="none", capsize=2,
+                                   label=f"sweep={sweep} (median, 95% interval)").lines[0]
+            else:
+                line, = ax.plot(n, t, marker="o", linestyle="none", label=f"sweep={sweep}")
             draw_fit(ax, fit_row(fits, sweep, "build_s", "nlogn"), line.get_color(), "-", f"{sweep}: fit a + b·N log N")
             draw_fit(ax, fit_row(fits, sweep, "build_s", "nlog2n"), line.get_color(), ":", f"{sweep}: fit a + b·N log² N")
             rx.plot(np.log2(n), t / (n * np.log2(n)) * 1e9, marker="o", linestyle="none", color=line.get_color(),

@@ -1,0 +1,100 @@
+// Replicated timings and their bootstrap intervals (lib/cost/replicates.h).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "accel/common/accel_factory.h"
+#include "accel/common/ray_sets.h"
+#include "cost/fit.h"
+#include "cost/replicates.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+TEST(Replicates, MedianAndCoefficientOfVariation) {
+  EXPECT_DOUBLE_EQ(median({3, 1, 2}), 2.0);
+  EXPECT_DOUBLE_EQ(median({4, 1, 3, 2}), 2.5);
+  EXPECT_TRUE(std::isnan(median({})));
+  // mean 2, sample standard deviation 1
+  EXPECT_NEAR(coefficient_of_variation({1, 2, 3}), 0.5, 1e-12);
+  EXPECT_TRUE(std::isnan(coefficient_of_variation({1})));
+}
+
+TEST(Replicates, BootstrapMedianIntervalHoldsTheMedianAndWidensWithTheSpread) {
+  const std::vector<double> tight = {1.00, 1.01, 0.99, 1.02, 0.98, 1.00, 1.01};
+  const std::vector<double> loose = {1.00, 1.30, 0.70, 1.40, 0.60, 1.00, 1.20};
+  const IntervalEstimate a = bootstrap_median(tight), b = bootstrap_median(loose);
+  EXPECT_DOUBLE_EQ(a.value, 1.00);
+  EXPECT_EQ(a.replicates, 7);
+  EXPECT_LE(a.lo, a.value);
+  EXPECT_GE(a.hi, a.value);
+  EXPECT_GE(a.lo, 0.98);
+  EXPECT_LE(a.hi, 1.02);
+  EXPECT_GT(b.hi - b.lo, 5 * (a.hi - a.lo));
+  // The seed is fixed: the same data give the same interval.
+  const IntervalEstimate again = bootstrap_median(loose);
+  EXPECT_EQ(again.lo, b.lo);
+  EXPECT_EQ(again.hi, b.hi);
+  const IntervalEstimate constant = bootstrap_median({2, 2, 2, 2, 2});
+  EXPECT_EQ(constant.lo, 2.0);
+  EXPECT_EQ(constant.hi, 2.0);
+  EXPECT_THROW(bootstrap_median({}), std::invalid_argument);
+}
+
+TEST(Replicates, BootstrapFitCoversTheTrueSlopeAndShrinksWithLessNoise) {
+  // y = 2 + 0.5·x, each of 6 points replicated 7 times with ±noise.
+  auto replicated = [](double noise) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-noise, noise);
+    std::vector<std::vector<double>> reps;
+    for (int x = 1; x <= 6; ++x) {
+      reps.emplace_back();
+      for (int r = 0; r < 7; ++r) reps.back().push_back((2 + 0.5 * x) * (1 + u(rng)));
+    }
+    return reps;
+  };
+  const std::vector<double> xs = {1, 2, 3, 4, 5, 6};
+  const auto slope = [&](const std::vector<double>& y) {
+    const FitResult f = fit_basis(xs, y, [](double x) { return x; });
+    return std::vector<double>{f.values[1]};
+  };
+  const BootstrapFit noisy = bootstrap_fit(replicated(0.2), slope, 200);
+  const BootstrapFit quiet = bootstrap_fit(replicated(0.02), slope, 200);
+  ASSERT_EQ(noisy.parameters.size(), 1u);
+  EXPECT_EQ(noisy.parameters[0].replicates, 7);
+  EXPECT_DOUBLE_EQ(noisy.finite_fraction[0], 1.0);
+  EXPECT_LT(quiet.parameters[0].lo, 0.5);
+  EXPECT_GT(quiet.parameters[0].hi, 0.5);
+  EXPECT_LT(noisy.parameters[0].lo, 0.5);
+  EXPECT_GT(noisy.parameters[0].hi, 0.5);
+  EXPECT_LT(quiet.parameters[0].hi - quiet.parameters[0].lo, 0.5 * (noisy.parameters[0].hi - noisy.parameters[0].lo));
+  EXPECT_THROW(bootstrap_fit({{1.0}, {}}, slope, 10), std::invalid_argument);
+}
+
+TEST(Replicates, TimeReplicatesGivesOneTimePerContenderAndRound) {
+  const auto scene = make_scene("sphere:n=200");
+  const auto bvh = make_accelerator("bvh", scene);
+  const auto brute = make_accelerator("brute", scene);
+  const std::vector<Ray> rays = make_ray_set("primary:256", scene);
+  ReplicateOptions o;
+  o.rounds = 5;
+  const ReplicateTiming t = time_replicates({bvh.get(), brute.get()}, rays, o);
+  ASSERT_EQ(t.ns.size(), 2u);
+  EXPECT_EQ(t.rounds(), 5);
+  EXPECT_TRUE(t.thread_cpu);
+  for (const auto& c : t.ns)
+    for (double ns : c) EXPECT_GT(ns, 0.0);
+  const IntervalEstimate r = t.ratio(1, 0);
+  EXPECT_EQ(r.replicates, 5);
+  EXPECT_LE(r.lo, r.value);
+  EXPECT_GE(r.hi, r.value);
+  EXPECT_THROW(time_replicates({}, rays, o), std::invalid_argument);
+  o.rounds = 0;
+  EXPECT_THROW(time_replicates({bvh.get()}, rays, o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace raylab
