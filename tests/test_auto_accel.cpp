@@ -175,8 +175,14 @@ TEST(AutoAccel, InstancedScenesChooseForEachPart) {
 }
 
 TEST(AutoAccel, WithoutBuildTimeModelsEveryCandidateIsBuiltAndSaysSo) {
+  // The tiny model less its build-time and scene-level models: a model file written before them.
+  CostModelSet set = read_model_file(tiny_model());
+  set.build.clear();
+  set.scene_trace.clear();
+  const std::string without = (scratch_dir() / "model_without_build.json").string();
+  write_model_file(set, without);
   const auto scene = make_scene("sphere:n=600");
-  const auto accel = make_accelerator("auto:model=default,rays=primary,count=1000", scene);
+  const auto accel = make_accelerator("auto:model=" + without + ",rays=primary,count=1000", scene);
   const AutoChoice& c = choice_of(*accel);
   EXPECT_EQ(c.method, "built-all");
   EXPECT_FALSE(c.note.empty());
