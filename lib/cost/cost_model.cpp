@@ -112,6 +112,8 @@ IntervalPrediction FittedCostModel::predict_interval(const RunRecord& run, doubl
   return log_normal_interval90(predict(run), std::sqrt(parameter + noise * noise), widening);
 }
 
+double range_widening(double factor) { return factor > 1.0 ? 1.0 + std::log2(factor) : 1.0; }
+
 IntervalPrediction log_normal_interval90(double predicted, double log_sigma, double widening) {
   IntervalPrediction p;
   p.ns = predicted;

@@ -71,6 +71,11 @@ struct IntervalPrediction {
 /// or log_sigma is not finite.
 IntervalPrediction log_normal_interval90(double predicted, double log_sigma, double widening = 1.0);
 
+/// w = 1 + log2(factor) for factor > 1, else 1: the interval widening outside a fitted range,
+/// `factor` the most a feature lies outside it (model_fit.h: check_feature_range). Every model's
+/// interval widens by this one rule (the build-time and scene-level models too).
+double range_widening(double factor);
+
 /// A fitted model of one level for one structure family.
 struct FittedCostModel {
   ModelLevel level = ModelLevel::counters;

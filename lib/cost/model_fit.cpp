@@ -114,8 +114,6 @@ std::string FeatureRangeCheck::describe() const {
   return buf;
 }
 
-double range_widening(double factor) { return factor > 1.0 ? 1.0 + std::log2(factor) : 1.0; }
-
 double RangeCheck::widening() const { return range_widening(worst.factor); }
 
 FeatureRangeCheck check_feature_range(const std::string& feature, double value, const FittedRange& range) {

@@ -80,9 +80,6 @@ struct FeatureRangeCheck {
 /// with a fitted range (the build-time model's primitives too).
 FeatureRangeCheck check_feature_range(const std::string& feature, double value, const FittedRange& range);
 
-/// w = 1 + log2(factor) for factor > 1, else 1: the interval widening outside a fitted range.
-double range_widening(double factor);
-
 /// A run against the fitted range of every feature of kRangeFeatures that the model has.
 struct RangeCheck {
   FeatureRangeCheck worst;                ///< the largest factor (factor 1 and no feature when inside)

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "cost/cost_model.h"
 #include "geometry/input_error.h"
 
 namespace raylab {
@@ -145,7 +146,7 @@ double SelectedLinearModel::extrapolation_factor(double primitives) const {
 
 std::pair<double, double> SelectedLinearModel::interval90(const FeatureRow& features, double primitives) const {
   const double y = predict(features);
-  const double q = log_q90 * (1.0 + std::log2(extrapolation_factor(primitives)));
+  const double q = log_q90 * range_widening(extrapolation_factor(primitives));
   return {y * std::exp(-q), y * std::exp(q)};
 }
 
