@@ -673,11 +673,6 @@ class CostModelExperiment {
       llc = std::max(llc, r.llc_bytes);
       largest = std::max(largest, static_cast<double>(r.primitives));
     }
-    auto median = [](std::vector<double> v) {
-      std::sort(v.begin(), v.end());
-      const std::size_t n = v.size();
-      return n == 0 ? NAN : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-    };
     std::string md = fmt::format(
         "### Memory: time per node visit against scale\n\nMedian ns per node visit (nodes + leaves of the counted "
         "pass; fit-target times) per structure family and decade of triangles, measured and (in parentheses) as the "
