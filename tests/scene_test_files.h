@@ -178,6 +178,11 @@ inline std::vector<BadSceneFile> write_bad_scene_files(const std::string& dir) {
   std::string huge = collada_tetrahedron();
   huge.replace(huge.find("count=\"12\""), 10, "count=\"4000000000\"");
   write("huge_array_count.dae", huge, "declares count 4000000000 but holds 12 values");
+  // Assimp 5.2.5 dereferences null on a <float_array> without its count (found by
+  // fuzz_scene_import): no check foresees it; the child process that runs Assimp dies, raylab does not.
+  std::string countless = collada_tetrahedron();
+  countless.replace(countless.find("count=\"12\""), 10, "count:=\"12\"");
+  write("float_array_without_count.dae", countless, "Assimp crashed (signal 11, Segmentation fault)");
   // Past raylab's checks Assimp itself refuses: its message, on one line.
   write("broken.dae", "<?xml version=\"1.0\"?>\n<COLLADA version=\"1.4.1\">\n<library_geometries>\n", "Assimp could not read");
   write("garbage.fbx", std::string("\0\1\2garbage", 10), "FBX");

@@ -14,12 +14,14 @@
 #include <limits>
 #include <map>
 #include <new>
+#include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
 #include "geometry/input_error.h"
 #include "geometry/input_warning.h"
+#include "scene/child_process.h"
 #include "scene/collada_check.h"
 #include "scene/fbx_check.h"
 #include "scene/file_format.h"
@@ -339,20 +341,15 @@ std::string assimp_error(const Assimp::Importer& importer) {
   return e.empty() ? "no reason given" : e;
 }
 
-}  // namespace
+/// Assimp's reader chooses by the extension: a file without one is given a name that has it and
+/// opened under its own (the directory, where relative buffers are looked up, is the same).
+std::string name_for_assimp(const std::string& path, const FileFormatDoc& doc) {
+  return has_no_extension(path) ? path + doc.extensions.front() : path;
+}
 
-Scene import_scene(const std::string& path, SceneImportReport* report) {
-  const FileFormat format = detect_file_format(path);
-  const FileFormatDoc& doc = file_format_doc(format);
-  if (doc.library != FileLibrary::assimp) fail(path, doc.name + " is read by OpenMesh as one mesh (mesh_io), not as a scene by Assimp");
-  std::error_code ec;
-  const std::uint64_t size = std::filesystem::file_size(path, ec);
-  if (ec) fail(path, "cannot determine the file size");
-  check_before_assimp(path, format, size);
-
-  // Assimp chooses its reader by the extension: a file without one is given a name that has it
-  // and opened under its own (the directory, where relative buffers are looked up, is the same).
-  const std::string name = has_no_extension(path) ? path + doc.extensions.front() : path;
+/// Reads the file through Assimp and builds the scene: run in a child process (import_scene).
+Scene read_with_assimp(const std::string& path, const std::string& name, const FileFormatDoc& doc,
+                       SceneImportReport& report) {
   Assimp::Importer importer;
   auto* io = new CappedIOSystem(name, path);
   importer.SetIOHandler(io);  // the importer owns it
@@ -377,8 +374,74 @@ Scene import_scene(const std::string& path, SceneImportReport* report) {
     fail(path, "Assimp could not read the " + doc.name + " file: " + assimp_error(importer) + refused);
   }
   if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail(path, "no triangles (Assimp read an incomplete scene: no meshes)");
+  return build_scene(path, *ai, report);
+}
+
+/// The imported scene and its report through the child's pipe (child_process.h); the reader checks
+/// every count against the caps before it allocates.
+void write_mesh(PipeSink& sink, const TriangleMesh& mesh) {
+  sink.put_vector(mesh.vertices);
+  sink.put_vector(mesh.triangles);
+}
+
+TriangleMesh read_mesh(PipeSource& source) {
+  TriangleMesh mesh;
+  mesh.vertices = source.get_vector<Vec3f>(3 * kMaxImportTriangles);
+  mesh.triangles = source.get_vector<std::array<std::uint32_t, 3>>(kMaxImportTriangles);
+  return mesh;
+}
+
+void write_imported(PipeSink& sink, const Scene& scene, const SceneImportReport& report) {
+  sink.put(report);
+  write_mesh(sink, scene.mesh);
+  sink.put_vector(scene.spheres);
+  sink.put<std::uint64_t>(scene.flat_mesh_count);
+  sink.put<std::uint64_t>(scene.left_out_lines);
+  sink.put<std::uint64_t>(scene.left_out_points);
+  sink.put<std::uint64_t>(scene.bases.size());
+  for (const auto& base : scene.bases) {
+    sink.put_string(base->spec);
+    write_mesh(sink, base->mesh);
+  }
+  sink.put_vector(scene.instances);
+}
+
+Scene read_imported(PipeSource& source, SceneImportReport& report) {
+  report = source.get<SceneImportReport>();
+  Scene scene;
+  scene.mesh = read_mesh(source);
+  scene.spheres = source.get_vector<Sphere>(kMaxImportTriangles);
+  scene.flat_mesh_count = source.get<std::uint64_t>();
+  scene.left_out_lines = source.get<std::uint64_t>();
+  scene.left_out_points = source.get<std::uint64_t>();
+  const auto bases = source.get<std::uint64_t>();
+  if (bases > kMaxImportNodes) throw std::length_error("wrote " + std::to_string(bases) + " bases, more than " + std::to_string(kMaxImportNodes));
+  for (std::uint64_t b = 0; b < bases; ++b) {
+    auto base = std::make_shared<Scene>();
+    base->spec = source.get_string(std::uint64_t{1} << 16);
+    base->mesh = read_mesh(source);
+    scene.bases.push_back(std::move(base));
+  }
+  scene.instances = source.get_vector<SceneInstance>(kMaxImportInstances);
+  return scene;
+}
+
+}  // namespace
+
+Scene import_scene(const std::string& path, SceneImportReport* report) {
+  const FileFormat format = detect_file_format(path);
+  const FileFormatDoc& doc = file_format_doc(format);
+  if (doc.library != FileLibrary::assimp) fail(path, doc.name + " is read by OpenMesh as one mesh (mesh_io), not as a scene by Assimp");
+  std::error_code ec;
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  if (ec) fail(path, "cannot determine the file size");
+  check_before_assimp(path, format, size);
+
   SceneImportReport local;
-  Scene scene = build_scene(path, *ai, local);
+  Scene scene = run_in_child_process<Scene>(
+      path + ": Assimp", [&] { return read_with_assimp(path, name_for_assimp(path, doc), doc, local); },
+      [&](PipeSink& sink, const Scene& read) { write_imported(sink, read, local); },
+      [&](PipeSource& source) { return read_imported(source, local); });
   if (local.lines > 0 || local.points > 0)
     warn_input(path + ": left out " + std::to_string(local.lines) + " lines and " + std::to_string(local.points) +
                " points (raylab traces triangles)");

@@ -26,7 +26,10 @@
 /// cycles, at most kMaxImportNodeDepth deep; affine, finite, invertible transforms; finite
 /// vertices, also after transforming and rounding to float; indices in range), and counts are
 /// capped before anything is allocated (kMaxImportTriangles stored triangles, 2^24 instances).
-/// Any fault, Assimp's own errors included, throws InputError naming the file.
+/// Assimp runs in a child process (child_process.h): a crash or abort inside Assimp on a file that
+/// passed these checks ends the child, and raylab reports it (`FILE: Assimp crashed (signal 11,
+/// Segmentation fault)`). Any fault, Assimp's own errors and crashes included, throws InputError
+/// naming the file.
 #include <cstddef>
 #include <cstdint>
 #include <string>

@@ -33,13 +33,6 @@
 #include "scene/scene_import.h"
 #include "scene/scene_spec.h"
 
-/// LeakSanitizer's suppressions for every binary that runs these targets (each fuzz target, and
-/// raylab_tests through test_bad_input_fuzz.cpp; this header is included once per binary):
-/// leaks allocated inside Assimp itself. Assimp 5.2.5's FBX reader leaks on malformed input (the
-/// 10 bytes "; FBX\nn:0:" leak 40; tests/fuzz/regressions/scene_import/), a bug raylab cannot
-/// guard against and does not patch; raylab's own leaks are still reported.
-extern "C" const char* __lsan_default_suppressions() { return "leak:libassimp.so\n"; }
-
 namespace raylab::fuzz {
 
 /// A per-process scratch file with the given extension, rewritten for each input.
