@@ -148,6 +148,13 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(k["mismatches"], 0);
   EXPECT_EQ(k["within_stated_bound"], true);
   EXPECT_DOUBLE_EQ(k["exact_fallbacks_per_ray"].get<double>(), 1.0);
+  // trace says which kernel ran and what it guarantees, as `raylab accels` states it.
+  EXPECT_EQ(k["kernel"], "certified");
+  EXPECT_EQ(k["guarantee"]["exact"], true);
+  EXPECT_EQ(k["guarantee"]["max_mismatch_rate"]["touching"], 0.0);
+  EXPECT_EQ(j["kernel"], "watertight");
+  EXPECT_EQ(j["guarantee"]["rule"], "tolerance");
+  EXPECT_EQ(j["guarantee"]["max_mismatch_rate"]["touching"], 1.0);
 
   // `raylab accels` states each bound per class, and the certified one beside the default.
   const ToolRun a = run_tool("accels");

@@ -117,6 +117,26 @@ void print_accuracy(const std::string& label, const AccuracyBound& b) {
             << b.on_surface << ", ill_conditioned " << b.ill_conditioned << "\n";
 }
 
+/// The kernel `spec` runs (its kernel= value, defaults expanded; the accelerator's own name when it
+/// has no kernel parameter, as Embree's) and the accuracy it states (`raylab accels`), for trace.
+void put_kernel_guarantee(nlohmann::ordered_json& j, const std::string& spec) {
+  const SpecString canonical = parse_spec(canonical_spec(spec));
+  std::string kernel = canonical.name;
+  for (const auto& [key, value] : canonical.params)
+    if (key == "kernel") kernel = value;
+  const AccuracyBound b = accuracy_bound(spec);
+  j["kernel"] = kernel;
+  j["guarantee"] = {{"exact", b.exact},
+                    {"rule", b.exact ? "exact" : "tolerance"},
+                    {"statement", b.statement},
+                    {"max_mismatch_rate",
+                     {{"crossing", b.crossing_other},
+                      {"crossing_edge_or_vertex_aimed", b.crossing_features},
+                      {"touching", b.touching},
+                      {"on_surface", b.on_surface},
+                      {"ill_conditioned", b.ill_conditioned}}}};
+}
+
 void print_accels() {
   for (const auto& k : accelerator_kinds()) {
     std::cout << k.name << "\n    " << k.summary << "\n";
@@ -248,6 +268,8 @@ int run_trace(const TraceCommand& o) {
   j["accel_nodes"] = stats.nodes;
   if (stats.sah_cost >= 0) j["sah_cost"] = stats.sah_cost;
   if (const auto hash = accel->structure_hash()) j["structure_hash"] = fmt::format("{:016x}", *hash);
+  const auto* auto_chooser = dynamic_cast<const AutoAccelerator*>(accel.get());
+  put_kernel_guarantee(j, auto_chooser ? auto_chooser->choice().chosen : o.accel);
   if (const auto* chooser = dynamic_cast<const AutoAccelerator*>(accel.get())) {
     const AutoChoice& c = chooser->choice();
     nlohmann::ordered_json candidates = nlohmann::ordered_json::array();
