@@ -223,6 +223,30 @@ TEST(AutoAccel, TraceHandsItsRayCountDownAndPrintsTheChoice) {
   EXPECT_TRUE(j.at("auto_runner_up").at("predicted_total_s").is_number());
   const std::size_t built = j.at("auto_candidates_built");
   EXPECT_EQ(built, j.at("auto_sampled").get<bool>() ? 2u : 1u);
+  EXPECT_EQ(j.at("auto_extrapolation_factor").get<double>(), 1.0);  // 2000 triangles: inside 300..6000
+  {
+    std::stringstream warnings;
+    warnings << std::ifstream(err).rdbuf();
+    EXPECT_EQ(warnings.str().find("outside the range"), std::string::npos) << warnings.str();
+  }
+
+  // Ten times the largest scene of the sweep: auto still chooses, widens its intervals and says so once.
+  const std::string far = std::string(RAYLAB_TOOL_PATH) + " trace --scene soup:n=60000 --accel auto:model=" +
+                          tiny_model() + ",rays=primary --rays primary:256 --threads 1 --no-counters --json >" +
+                          out.string() + " 2>" + err.string();
+  const int far_status = std::system(far.c_str());
+  ASSERT_TRUE(WIFEXITED(far_status) && WEXITSTATUS(far_status) == 0) << far;
+  std::stringstream far_text, far_err;
+  far_text << std::ifstream(out).rdbuf();
+  far_err << std::ifstream(err).rdbuf();
+  const auto f = nlohmann::json::parse(far_text.str());
+  EXPECT_EQ(f.at("auto_method"), "predicted");
+  EXPECT_GT(f.at("auto_extrapolation_factor").get<double>(), 5.0);
+  const std::string warning = far_err.str();
+  const auto at = warning.find("raylab: warning: auto: 6e+04 primitives lie outside the range its models were fitted on");
+  EXPECT_NE(at, std::string::npos) << warning;
+  EXPECT_EQ(warning.find("outside the range", warning.find("outside the range") + 1), std::string::npos)
+      << "warned more than once: " << warning;
 
   const std::string bad = std::string(RAYLAB_TOOL_PATH) +
                           " trace --scene soup:n=200 --accel auto:count=-5 --rays primary:16 >" + out.string() +

@@ -303,6 +303,7 @@ int run_trace(const TraceCommand& o) {
                                                                        {"predicted_total_s", number_or_null(c.runner_up_total_s)}};
     j["auto_candidates_built"] = c.candidates_built;
     j["auto_sampled"] = c.sampled;
+    j["auto_extrapolation_factor"] = c.extrapolation_factor;
     if (!c.note.empty()) j["auto_note"] = c.note;
   }
   j["build_rss_growth_bytes"] = peak_rss_bytes() - rss_before;

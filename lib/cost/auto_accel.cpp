@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <cstdio>
 #include <map>
 
 #include "accel/common/accel_factory.h"
@@ -11,11 +12,13 @@
 #include "accel/common/tracer.h"
 #include "cost/accel_spec_key.h"
 #include "cost/build_time_model.h"
+#include "cost/cost_model.h"
 #include "cost/model_file.h"
 #include "cost/scene_features.h"
 #include "cost/scene_trace_model.h"
 #include "cost/tree_features.h"
 #include "geometry/input_error.h"
+#include "geometry/input_warning.h"
 
 namespace raylab {
 namespace {
@@ -185,12 +188,14 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
           c.skipped = "the model has no scene-level trace model of this spec for " + cls + " rays";
           break;
         }
+        c.extrapolation_factor = std::max(c.extrapolation_factor, it->second.extrapolation_factor(sf.primitives));
         const auto [lo, hi] = it->second.interval90(trace_x, sf.primitives);
         ns += it->second.predict(trace_x) / static_cast<double>(classes.size());
         ns_lo += lo / static_cast<double>(classes.size());
         ns_hi += hi / static_cast<double>(classes.size());
       }
       if (c.skipped.empty()) {
+        c.extrapolation_factor = std::max(c.extrapolation_factor, build->extrapolation_factor(sf.primitives));
         const auto [b_lo, b_hi] = build->interval90(build_x, sf.primitives);
         c.predicted_ns_per_ray = ns;
         c.predicted_build_s = build->predict(build_x);
@@ -257,6 +262,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   choice.chosen = chosen.spec;
   choice.predicted_ns_per_ray = chosen.predicted_ns_per_ray;
   choice.predicted_build_s = chosen.predicted_build_s;
+  choice.extrapolation_factor = chosen.extrapolation_factor;
   if (choice.count > 0) choice.predicted_trace_s = choice.count * chosen.predicted_ns_per_ray * 1e-9;
   const std::size_t runner = ranked.front() == best_k ? (ranked.size() > 1 ? ranked[1] : best_k) : ranked.front();
   if (runner != best_k) {
@@ -284,6 +290,18 @@ std::unique_ptr<Aggregate> choose(const std::shared_ptr<const Scene>& scene, con
   return choose_built_all(scene, models, model_path, choice);
 }
 
+/// One warning line when the choice rests on models used outside the sizes they were fitted on.
+void warn_if_extrapolated(const AutoChoice& choice, double primitives) {
+  if (!(choice.extrapolation_factor > 1.0)) return;
+  char numbers[160];
+  std::snprintf(numbers, sizeof numbers, "%.4g primitives lie outside the range its models were fitted on, by a factor %.3g",
+                primitives, choice.extrapolation_factor);
+  char widening[64];
+  std::snprintf(widening, sizeof widening, "%.2fx", range_widening(choice.extrapolation_factor));
+  warn_input("auto: " + std::string(numbers) + " (its choice " + choice.chosen + "); the 90% intervals are widened by " +
+             widening + " (docs/cost_model.md)");
+}
+
 std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecReader& r) {
   const std::string model_path = r.get_string("model", "default");
   AutoChoice choice;
@@ -293,11 +311,12 @@ std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecRea
   const CostModelSet models = read_model_file(model_path);
   if (!scene->instanced()) {
     auto chosen = choose(scene, models, model_path, choice);
+    warn_if_extrapolated(choice, scene->total_primitive_count());
     return std::make_unique<AutoAccelerator>(std::move(chosen), std::move(choice));
   }
   // Instances: choose for each base (placed under its instances) and for the flat geometry apart;
   // the choice reported is the one for the part with the most primitives.
-  double largest = -1.0, choose_s = 0;
+  double largest = -1.0, choose_s = 0, extrapolation = 1.0;
   std::size_t built = 0;
   const AutoChoice blank = choice;
   auto top = make_instanced_aggregate(*scene, [&](std::shared_ptr<const Scene> part) {
@@ -305,6 +324,7 @@ std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecRea
     auto chosen = choose(part, models, model_path, part_choice);
     choose_s += part_choice.choose_s;
     built += part_choice.candidates_built;
+    extrapolation = std::max(extrapolation, part_choice.extrapolation_factor);
     if (part->total_primitive_count() > largest) {
       largest = part->total_primitive_count();
       choice = std::move(part_choice);
@@ -313,6 +333,8 @@ std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecRea
   });
   choice.choose_s = choose_s;
   choice.candidates_built = built;
+  choice.extrapolation_factor = extrapolation;
+  warn_if_extrapolated(choice, largest);
   return std::make_unique<AutoAccelerator>(std::move(top), std::move(choice));
 }
 

@@ -54,6 +54,9 @@ struct AutoCandidate {
   bool built = false;
   double measured_build_s = std::numeric_limits<double>::quiet_NaN();     ///< when built
   double measured_ns_per_ray = std::numeric_limits<double>::quiet_NaN();  ///< when timed on the sample
+  /// How far the scene's primitives lie outside the range its build-time and trace models were
+  /// fitted on (the largest factor, SelectedLinearModel::extrapolation_factor); 1 inside.
+  double extrapolation_factor = 1.0;
 };
 
 struct AutoChoice {
@@ -75,6 +78,9 @@ struct AutoChoice {
   double runner_up_total_s = std::numeric_limits<double>::quiet_NaN();  ///< its predicted total (or ns per ray × count)
   std::size_t candidates_built = 0;
   bool sampled = false;  ///< the best two overlapped: both built and timed on kAutoSampleRays rays
+  /// The chosen candidate's extrapolation_factor (the largest over the parts of an instanced
+  /// scene): above 1, the choice rests on models used outside their data, and auto warns once.
+  double extrapolation_factor = 1.0;
 };
 
 /// The candidate specs for a model whose families are `families` (model path spliced into the
