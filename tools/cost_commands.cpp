@@ -228,7 +228,8 @@ int run_fit_command(const FitCommand& o) {
 int run_predict_command(const PredictCommand& o) {
   if (o.threads < 1 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 1..1024");
   if (o.passes < 5 || o.passes > 1000) throw InputError("--passes " + std::to_string(o.passes) + ": expected 5..1000");
-  const CostModelSet models = read_model_file(o.model);
+  const std::shared_ptr<const CostModelSet> loaded = load_model_file(o.model);
+  const CostModelSet& models = *loaded;
   {
     SpecReader reader(parse_spec(o.accel));
     reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);

@@ -308,7 +308,8 @@ std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecRea
   choice.count = parse_count(r);
   choice.rays = r.get_choice("rays", "mixed", kRayKinds);
   choice.model = resolve_model_path(model_path);
-  const CostModelSet models = read_model_file(model_path);
+  const std::shared_ptr<const CostModelSet> loaded = load_model_file(model_path);
+  const CostModelSet& models = *loaded;
   if (!scene->instanced()) {
     auto chosen = choose(scene, models, model_path, choice);
     warn_if_extrapolated(choice, scene->total_primitive_count());
@@ -348,7 +349,8 @@ AccelKind make_auto_kind() {
             r.get_choice("rays", "mixed", kRayKinds);
             parse_count(r);
             const std::string model = r.get_string("model", "default");
-            const CostModelSet models = read_model_file(model);
+            const std::shared_ptr<const CostModelSet> loaded = load_model_file(model);
+            const CostModelSet& models = *loaded;
             std::vector<std::string> families;
             for (const auto& [family, m] : models.families) families.push_back(family);
             AccuracyBound loosest;

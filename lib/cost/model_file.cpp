@@ -1,6 +1,7 @@
 #include "cost/model_file.h"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -310,17 +311,29 @@ CostModelSet read_model_file(const std::string& path_in) {
   return set;
 }
 
-FittedSahCost load_builder_costs(const std::string& path, const std::string& family) {
+std::shared_ptr<const CostModelSet> load_model_file(const std::string& path) {
   static std::mutex mutex;
-  static std::map<std::string, CostModelSet> cache;
+  static std::map<std::string, std::pair<std::string, std::shared_ptr<const CostModelSet>>> cache;
   const std::string resolved = resolve_model_path(path);
-  const CostModelSet* set;
-  {
-    std::lock_guard lock(mutex);
-    auto it = cache.find(resolved);
-    if (it == cache.end()) it = cache.emplace(resolved, read_model_file(resolved)).first;
-    set = &it->second;
+  // The version of the file: its size and modification time (none when it cannot be read, which
+  // read_model_file then reports).
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(resolved, ec);
+  const auto mtime = std::filesystem::last_write_time(resolved, ec);
+  const std::string version =
+      ec ? std::string() : std::to_string(size) + "@" + std::to_string(mtime.time_since_epoch().count());
+  std::lock_guard lock(mutex);
+  auto it = cache.find(resolved);
+  if (it == cache.end() || version.empty() || it->second.first != version) {
+    auto set = std::make_shared<const CostModelSet>(read_model_file(resolved));
+    it = cache.insert_or_assign(resolved, std::make_pair(version, std::move(set))).first;
   }
+  return it->second.second;
+}
+
+FittedSahCost load_builder_costs(const std::string& path, const std::string& family) {
+  const std::string resolved = resolve_model_path(path);
+  const std::shared_ptr<const CostModelSet> set = load_model_file(resolved);
   const FamilyModel& m = set->family(family);
   if (!(m.builder.c_trav > 0) || !(m.builder.c_isect > 0) || !(m.builder.c_leaf >= 0))
     throw InputError(resolved + ": the fitted constants of '" + family + "' are not positive (c_trav " +

@@ -13,6 +13,7 @@
 /// replicate error, and their residual spread is estimated from the stored MAPE (s ≈ MAPE·√(π/2)).
 /// A file of another format or version, a missing key, or a non-finite value is an InputError
 /// naming the file and the key.
+#include <memory>
 #include <string>
 
 #include "cost/model_fit.h"
@@ -26,6 +27,11 @@ void write_model_file(const CostModelSet& set, const std::string& path);
 /// Reads and validates a model file; `default` names default_model_path().
 CostModelSet read_model_file(const std::string& path);
 
+/// The one way the builders' `cost=`, `auto` and `predict` read a model: read_model_file once per
+/// process for each resolved path, size and modification time (a file rewritten since is read
+/// again). Safe to call from several threads.
+std::shared_ptr<const CostModelSet> load_model_file(const std::string& path);
+
 /// The model committed with the lab (data/cost/default_model.json), which `./lab report` refits.
 std::string default_model_path();
 
@@ -34,7 +40,7 @@ std::string resolve_model_path(const std::string& path);
 
 /// The SAH constants for `family` from the model at `path` (the loader lib/cost registers for
 /// the builders' `cost=`); throws InputError when the family is missing or its constants are not
-/// positive. Files are read once per process and path.
+/// positive. The file is read by load_model_file.
 FittedSahCost load_builder_costs(const std::string& path, const std::string& family);
 
 }  // namespace raylab
