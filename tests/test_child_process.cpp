@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <numeric>
@@ -85,6 +86,20 @@ TEST(ChildProcess, CrashesAndEarlyExitsAreNamed) {
             std::string::npos);
   EXPECT_EQ(error_of([](PipeSink&) { ::_exit(7); }), "test child exited with status 7 before its result was complete");
   EXPECT_EQ(error_of([](PipeSink&) {}), "test child ended before its result was complete");
+}
+
+TEST(ChildProcess, AChildPastItsTimeLimitIsStopped) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string e = "no error";
+  try {
+    raylab::run_in_child_process(
+        "test child", [](PipeSink&) { ::sleep(30); }, [](PipeSource& s) { s.get<std::uint64_t>(); },
+        std::chrono::milliseconds(300));
+  } catch (const InputError& error) {
+    e = error.what();
+  }
+  EXPECT_EQ(e, "test child did not finish within 0.3 s; raylab stopped it");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
 }
 
 TEST(ChildProcess, CountsAreCheckedBeforeAllocating) {

@@ -1,6 +1,7 @@
 #include "scene/child_process.h"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -89,6 +90,7 @@ void PipeSource::read(void* data, std::size_t bytes) {
   out += buffered;
   bytes -= buffered;
   while (bytes > 0) {
+    wait_readable();
     const ssize_t n = ::read(fd_, out, bytes);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) throw OutputEnded{};
@@ -107,12 +109,25 @@ bool PipeSource::at_end() {
   if (begin_ < buffer_.size()) return false;
   char c;
   for (;;) {
+    wait_readable();
     const ssize_t n = ::read(fd_, &c, 1);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return true;
     buffer_.assign(1, c);
     begin_ = 0;
     return false;
+  }
+}
+
+void PipeSource::wait_readable() const {
+  if (deadline_ == std::chrono::steady_clock::time_point::max()) return;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - std::chrono::steady_clock::now());
+    if (left.count() <= 0) throw TimedOut{};
+    pollfd p{fd_, POLLIN, 0};
+    const int n = ::poll(&p, 1, static_cast<int>(std::min<std::int64_t>(left.count(), 60'000)));
+    if (n > 0) return;  // readable, or the child closed its end (read sees the end)
+    if (n < 0 && errno != EINTR) return;  // read reports the error
   }
 }
 
@@ -124,7 +139,9 @@ std::size_t PipeSource::checked_count(std::uint64_t count, std::uint64_t max_cou
 }
 
 void run_in_child_process(const std::string& what, const std::function<void(PipeSink&)>& compute_and_write,
-                          const std::function<void(PipeSource&)>& read) {
+                          const std::function<void(PipeSource&)>& read, std::chrono::milliseconds time_limit) {
+  const auto deadline = time_limit.count() > 0 ? std::chrono::steady_clock::now() + time_limit
+                                               : std::chrono::steady_clock::time_point::max();
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) throw InputError(what + ": cannot create a pipe: " + std::strerror(errno));
   std::fflush(nullptr);  // nothing buffered is written twice
@@ -153,7 +170,7 @@ void run_in_child_process(const std::string& what, const std::function<void(Pipe
     ::_exit(status);
   }
   ::close(fds[1]);
-  PipeSource source(fds[0]);
+  PipeSource source(fds[0], deadline);
   std::string child_error;
   bool ended = false;
   try {
@@ -171,6 +188,13 @@ void run_in_child_process(const std::string& what, const std::function<void(Pipe
     ::kill(pid, SIGKILL);
     reap(pid);
     throw InputError(what + " " + e.what());
+  } catch (const PipeSource::TimedOut&) {
+    ::close(fds[0]);
+    ::kill(pid, SIGKILL);
+    reap(pid);
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "%.3g", static_cast<double>(time_limit.count()) * 1e-3);
+    throw InputError(what + " did not finish within " + seconds + " s; raylab stopped it");
   } catch (...) {
     ::close(fds[0]);
     ::kill(pid, SIGKILL);

@@ -9,6 +9,7 @@
 /// while it is written (PipeSource), so a result is never held twice in one process. The child
 /// resets the fatal signals to their default action, so it dies by the signal, which the parent
 /// names; it leaves by _exit(2), running no atexit handler of the parent's.
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -57,7 +58,9 @@ class PipeSink {
 class PipeSource {
  public:
   struct OutputEnded {};
-  explicit PipeSource(int fd) : fd_(fd) {}
+  struct TimedOut {};  ///< the deadline passed while waiting for the child's output
+  explicit PipeSource(int fd, std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max())
+      : fd_(fd), deadline_(deadline) {}
   void read(void* data, std::size_t bytes);
   template <class T>
   T get() {
@@ -81,7 +84,10 @@ class PipeSource {
 
  private:
   static std::size_t checked_count(std::uint64_t count, std::uint64_t max_count);
+  /// Waits until the pipe can be read; throws TimedOut past the deadline.
+  void wait_readable() const;
   int fd_;
+  std::chrono::steady_clock::time_point deadline_;
   std::vector<char> buffer_;
   std::size_t begin_ = 0;
 };
@@ -90,17 +96,20 @@ class PipeSource {
 /// An exception that `compute_and_write` throws before its first write reaches the parent as an
 /// InputError with the same message (one other than InputError is prefixed by `what`); one thrown
 /// later ends the child with status 3. Throws InputError("`what`: ...") when the child dies by a
-/// signal (named), exits before its result is complete or with a non-zero status, or when pipe(2)
-/// or fork(2) fail.
+/// signal (named), exits before its result is complete or with a non-zero status, does not finish
+/// within `time_limit` (zero: no limit; the child is then killed), or when pipe(2) or fork(2) fail.
 void run_in_child_process(const std::string& what, const std::function<void(PipeSink&)>& compute_and_write,
-                          const std::function<void(PipeSource&)>& read);
+                          const std::function<void(PipeSource&)>& read,
+                          std::chrono::milliseconds time_limit = std::chrono::milliseconds::zero());
 
 /// The typed form: `compute` runs in the child, `write` streams its result, `read` rebuilds it.
 template <class Result, class Compute, class Write, class Read>
-Result run_in_child_process(const std::string& what, Compute compute, Write write, Read read) {
+Result run_in_child_process(const std::string& what, Compute compute, Write write, Read read,
+                            std::chrono::milliseconds time_limit = std::chrono::milliseconds::zero()) {
   Result result{};
   run_in_child_process(
-      what, [&](PipeSink& sink) { write(sink, compute()); }, [&](PipeSource& source) { result = read(source); });
+      what, [&](PipeSink& sink) { write(sink, compute()); }, [&](PipeSource& source) { result = read(source); },
+      time_limit);
   return result;
 }
 

@@ -7,6 +7,7 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -341,6 +342,13 @@ std::string assimp_error(const Assimp::Importer& importer) {
   return e.empty() ? "no reason given" : e;
 }
 
+/// How long Assimp may take on a file of `bytes`: 10 s, plus 1 s per MiB (Assimp reads tens of
+/// MiB per second; an endless loop inside it, as on a stray character in a COLLADA index list,
+/// is stopped instead of hanging raylab).
+std::chrono::milliseconds assimp_time_limit(std::uint64_t bytes) {
+  return std::chrono::milliseconds(10'000 + static_cast<std::int64_t>(bytes >> 20) * 1'000);
+}
+
 /// Assimp's reader chooses by the extension: a file without one is given a name that has it and
 /// opened under its own (the directory, where relative buffers are looked up, is the same).
 std::string name_for_assimp(const std::string& path, const FileFormatDoc& doc) {
@@ -441,7 +449,7 @@ Scene import_scene(const std::string& path, SceneImportReport* report) {
   Scene scene = run_in_child_process<Scene>(
       path + ": Assimp", [&] { return read_with_assimp(path, name_for_assimp(path, doc), doc, local); },
       [&](PipeSink& sink, const Scene& read) { write_imported(sink, read, local); },
-      [&](PipeSource& source) { return read_imported(source, local); });
+      [&](PipeSource& source) { return read_imported(source, local); }, assimp_time_limit(size));
   if (local.lines > 0 || local.points > 0)
     warn_input(path + ": left out " + std::to_string(local.lines) + " lines and " + std::to_string(local.points) +
                " points (raylab traces triangles)");

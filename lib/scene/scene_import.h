@@ -28,7 +28,8 @@
 /// capped before anything is allocated (kMaxImportTriangles stored triangles, 2^24 instances).
 /// Assimp runs in a child process (child_process.h): a crash or abort inside Assimp on a file that
 /// passed these checks ends the child, and raylab reports it (`FILE: Assimp crashed (signal 11,
-/// Segmentation fault)`). Any fault, Assimp's own errors and crashes included, throws InputError
+/// Segmentation fault)`), and one that runs longer than 10 s plus 1 s per MiB of the file is
+/// stopped. Any fault, Assimp's own errors, crashes and time-outs included, throws InputError
 /// naming the file.
 #include <cstddef>
 #include <cstdint>
