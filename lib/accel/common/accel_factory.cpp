@@ -8,6 +8,7 @@
 #include "accel/bvh/primitive_bvh.h"
 #include "accel/common/ray_sets.h"
 #include "accel/embree/embree_accel.h"
+#include "accel/exact/certified_instances.h"
 #include "accel/exact/exact_oracle.h"
 #include "accel/grid/grid_spec.h"
 #include "accel/grid/uniform_grid.h"
@@ -157,7 +158,11 @@ std::unique_ptr<Aggregate> make_instanced_aggregate(
 std::unique_ptr<Aggregate> make_instanced_for_kernel(
     KernelChoice kernel, const Scene& scene,
     const std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>)>& make) {
-  return kernel == KernelChoice::certified ? make_over_flattened_instances(scene, make) : over_instances(scene, make);
+  if (kernel != KernelChoice::certified) return over_instances(scene, make);
+  // The flat copy under the requested structure while the exact oracle would hold it; beyond, the
+  // same answers from the bases alone (certified_instances.h).
+  if (scene.total_primitive_count() <= kExactOracleMaxPrimitives) return make_over_flattened_instances(scene, make);
+  return std::make_unique<CertifiedInstances>(std::make_shared<const Scene>(scene));
 }
 
 RayBucket ray_bucket(const RayContact& c) {

@@ -219,10 +219,6 @@ class ExactOracle final : public AggregateBase<ExactOracle> {
 
 }  // namespace
 
-namespace {
-
-/// Whether the linear part of `xf` is a rotation times a uniform scale (up to rounding), which
-/// maps a sphere onto a sphere.
 bool is_similarity(const AffineTransform& xf) {
   const Vec3d c[3] = {xf.apply_vector(Vec3d(1, 0, 0)), xf.apply_vector(Vec3d(0, 1, 0)), xf.apply_vector(Vec3d(0, 0, 1))};
   const double n = dot(c[0], c[0]);
@@ -230,6 +226,8 @@ bool is_similarity(const AffineTransform& xf) {
   return std::abs(dot(c[1], c[1]) - n) <= tol && std::abs(dot(c[2], c[2]) - n) <= tol && std::abs(dot(c[0], c[1])) <= tol &&
          std::abs(dot(c[0], c[2])) <= tol && std::abs(dot(c[1], c[2])) <= tol;
 }
+
+namespace {
 
 /// Appends `part`'s geometry under `xf` to `flat` (vertices transformed in double, rounded to float).
 void append_transformed(Scene& flat, std::vector<Sphere>& spheres, const Scene& part, const AffineTransform& xf) {

@@ -21,6 +21,10 @@ inline constexpr double kExactOracleMaxPrimitives = 1u << 26;
 /// kExactOracleMaxPrimitives primitives.
 std::unique_ptr<Aggregate> make_exact_oracle(std::shared_ptr<const Scene> scene);
 
+/// Whether the linear part of `xf` is a rotation times a uniform scale (up to rounding), which
+/// maps a sphere onto a sphere (flatten_instances refuses spheres under any other transform).
+bool is_similarity(const AffineTransform& xf);
+
 /// The flat copy of an instanced scene the oracle uses: the flat geometry's triangles, then those
 /// of instance 0, 1, ... (vertices transformed in double, rounded to float), then the spheres in
 /// the same order. Throws InputError when the copy would exceed kExactOracleMaxPrimitives, for an
