@@ -21,7 +21,7 @@ FAMILIES = {
     "kd-tree": (["kdtree"], "tab:blue"),
     "octree": (["octree"], "tab:purple"),
     "BSP": (["bsp"], "tab:orange"),
-    "BVH": (["bvh"], "tab:red"),
+    "BVH": (["bvh", "certified-instances"], "tab:red"),
 }
 EMBREE_COLOUR = "black"
 AUTO_COLOUR = "0.55"
@@ -49,6 +49,8 @@ def kernel_of(method: str) -> str:
         return "Embree default"
     if kind == "exact":
         return "exact"
+    if kind == "certified-instances":
+        return "certified"
     values = dict(p.split("=", 1) for p in params.split(",") if "=" in p)
     if "kernel" in values:
         return values["kernel"]

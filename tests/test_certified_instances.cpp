@@ -21,11 +21,13 @@ namespace raylab {
 namespace {
 
 TEST(CertifiedInstances, AgreeWithTheOracleOnTheFlatCopyByTheExactRule) {
-  const std::string flat_and_instanced = std::string(RAYLAB_TEST_DATA) + "/../fuzz/corpus/scene_import/three_levels.gltf";
+  // The oracle suite runs certified-instances on its scenes (instances, glTF instances under
+  // non-uniform scales beside flat geometry, far and tiny transformed scenes); these add an open
+  // mesh of one shared vertex far from the origin, a tiny rotated closed mesh, and spheres.
   for (const std::string& spec : std::vector<std::string>{
-           "instances:of=(sphere:n=300),count=27", "transformed:of=(instances:of=(fan:n=16),count=8),translate=1e4:0:0",
-        "transformed:of=(instances:of=(sphere:n=200),count=8),rotate=x:30,scale=1e-4",
-        "instances:of=(sphereflake:depth=1),count=8", flat_and_instanced}) {
+           "transformed:of=(instances:of=(fan:n=16),count=8),translate=1e4:0:0",
+           "transformed:of=(instances:of=(sphere:n=200),count=8),rotate=x:30,scale=1e-4",
+           "instances:of=(sphereflake:depth=1),count=8"}) {
     SCOPED_TRACE(spec);
     const auto scene = make_scene(spec);
     ASSERT_TRUE(scene->instanced());

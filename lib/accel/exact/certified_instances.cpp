@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "accel/bvh/bvh_build.h"
+#include "accel/common/accel_factory.h"
 #include "accel/exact/exact_oracle.h"
 #include "geometry/certified_kernel.h"
 #include "geometry/input_error.h"
@@ -245,5 +246,22 @@ template bool CertifiedInstances::intersect_impl<NoCounters>(Ray&, Hit&, NoCount
 template bool CertifiedInstances::intersect_impl<RayCounters>(Ray&, Hit&, RayCounters&) const;
 template bool CertifiedInstances::occluded_impl<NoCounters>(const Ray&, NoCounters&) const;
 template bool CertifiedInstances::occluded_impl<RayCounters>(const Ray&, RayCounters&) const;
+
+namespace {
+
+AccelKind make_certified_instances_kind() {
+  return {"certified-instances",
+          "certified first hits for an instanced scene's flat copy without storing it (what kernel=certified uses "
+          "beyond 2^26 primitives): a binned BVH per base, node boxes carried to world space per ray",
+          {},
+          [](std::shared_ptr<const Scene> scene, SpecReader&) -> std::unique_ptr<Aggregate> {
+            return std::make_unique<CertifiedInstances>(std::move(scene));
+          },
+          [](SpecReader&) { return exact_accuracy("certified kernel on the flat copy's world vertices, conservative world boxes"); }};
+}
+
+const AccelRegistration certified_instances_registration(make_certified_instances_kind(), 75);
+
+}  // namespace
 
 }  // namespace raylab

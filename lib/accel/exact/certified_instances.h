@@ -27,8 +27,10 @@ namespace raylab {
 
 class CertifiedInstances final : public AggregateBase<CertifiedInstances> {
  public:
-  /// `scene` must be instanced; throws InputError for an invalid instancing
-  /// (require_valid_instances) and for spheres under a non-uniform scale (as flatten_instances).
+  /// Any scene (one without instances is its own flat copy); throws InputError for an invalid
+  /// instancing (require_valid_instances) and for spheres under a non-uniform scale (as
+  /// flatten_instances). Registered as the accelerator `certified-instances`, so that the oracle
+  /// suite runs it on every scene.
   explicit CertifiedInstances(std::shared_ptr<const Scene> scene);
 
   std::string name() const override { return "certified-instances"; }
