@@ -25,7 +25,7 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kBatchFraction = 0.02;
 constexpr int kCooldownPasses = 50;
 /// Convergence: the optimisation ends when kStalePasses passes in a row (a round) lowered the
-/// best interior area by less than kMinProgress (relative) in all.
+/// interior area by less than kMinProgress (relative) in all.
 constexpr int kStalePasses = 50;
 constexpr double kMinProgress = 1e-3;
 
@@ -129,8 +129,8 @@ class Reinserter {
     return moves;
   }
 
-  const LinkedTree& tree() const { return t_; }
-  void restore(const LinkedTree& t) { t_ = t; }
+  /// How much the moves so far lowered Σ SA over the interior nodes (as the searches computed it).
+  double saved() const { return saved_; }
 
   /// The tree laid out as the builders lay it out: depth first, siblings adjacent, each node's
   /// children placed before either child's subtree. Leaves keep their `first` and `count`.
@@ -198,7 +198,9 @@ class Reinserter {
     // go back, so that no pass raises the cost.
     if (!(cost < gain * (1.0 - 1e-9))) target = sibling;
     link(x, p, target);
-    return target != sibling;
+    if (target == sibling) return false;
+    saved_ += gain - cost;
+    return true;
   }
 
   /// The position for subtree `x` (out of the tree) that least increases Σ SA over the interior
@@ -257,6 +259,7 @@ class Reinserter {
   std::vector<std::pair<double, std::uint32_t>> heap_;
   std::vector<int> last_chosen_;  ///< the pass that last chose each node (-kCooldownPasses - 1: none)
   int pass_ = 0;
+  double saved_ = 0.0;
 };
 
 }  // namespace
@@ -274,31 +277,21 @@ BvhOptimizeStats optimize_bvh_reinsertion(Bvh2& bvh, const BvhSahCost& cost, int
   }
   Reinserter r(bvh);
   const double initial = r.interior_area();
-  double best = initial, anchor = initial;
-  LinkedTree best_tree = r.tree();
-  bool current_is_best = true;
+  double anchor = initial;
   int stale = 0;
   while ((max_passes <= 0 || stats.passes < max_passes) && (budget_seconds <= 0.0 || elapsed() < budget_seconds)) {
     stats.moves += r.pass();
     ++stats.passes;
-    current_is_best = false;
-    if (r.depth() > kBvhMaxDepth) break;
-    const double area = r.interior_area();
-    current_is_best = area < best;
-    if (current_is_best) {
-      best = area;
-      best_tree = r.tree();
-    }
-    if (best < anchor * (1.0 - kMinProgress)) {
-      anchor = best;
+    if (initial - r.saved() < anchor * (1.0 - kMinProgress)) {
+      anchor = initial - r.saved();
       stale = 0;
     } else if (++stale >= kStalePasses) {
       break;
     }
   }
-  // Summation order differs in the emitted tree: an improvement below rounding keeps the input.
-  if (best < initial * (1.0 - 1e-9)) {
-    if (!current_is_best) r.restore(best_tree);
+  // Every move lowers the cost, so the last tree is the best. It replaces the input unless it is
+  // deeper than kBvhMaxDepth, or better only by rounding (the emitted tree sums in another order).
+  if (r.interior_area() < initial * (1.0 - 1e-9) && r.depth() <= kBvhMaxDepth) {
     bvh = r.emit();
     stats.cost_after = bvh_sah_cost(bvh, cost);
   }

@@ -32,13 +32,12 @@ struct BvhOptimizeStats {
 
 /// Reinsertion-optimises `bvh` in place under `cost` and returns what it did. The result holds
 /// the same leaves (node count, leaf boxes and the `prims` array unchanged) under new interior
-/// nodes, laid out depth first with siblings adjacent as the builders lay them out; its cost is
-/// the lowest seen after any pass, never above the input's, and its depth stays within
-/// kBvhMaxDepth (a pass that would exceed it ends the optimisation at the best earlier tree).
-/// Stops when `max_passes` (0: no limit) passes ran, when `budget_seconds` (0: no limit) have
-/// passed (then the tree depends on timing), or when fifty passes in a row lowered the best cost
-/// by less than 0.1% in all. Each pass chooses 2% of the interior nodes, none chosen in the 50
-/// passes before. Deterministic without a time budget. Single threaded.
+/// nodes, laid out depth first with siblings adjacent as the builders lay them out. Every move
+/// lowers the cost, so the cost never rises; a result deeper than kBvhMaxDepth is discarded (the
+/// input stays). Stops when `max_passes` (0: no limit) passes ran, when `budget_seconds` (0: no
+/// limit) have passed (then the tree depends on timing), or when fifty passes in a row lowered the
+/// cost by less than 0.1% in all. Each pass chooses 2% of the interior nodes, none chosen in the
+/// 50 passes before. Deterministic without a time budget. Single threaded.
 BvhOptimizeStats optimize_bvh_reinsertion(Bvh2& bvh, const BvhSahCost& cost, int max_passes = 0,
                                           double budget_seconds = 0.0);
 
