@@ -237,13 +237,17 @@ class Reinserter {
     return best_cost;
   }
 
-  /// Makes `q` the parent of `x` and `t` in t's place.
+  /// Makes `q` the parent of `x` and `t` in t's place. As the builders' splits do, the child whose
+  /// box centre lies lower along q's longest axis comes first: any-hit traversal visits children
+  /// in stored order (wide_bvh_traversal.h).
   void link(std::uint32_t x, std::uint32_t q, std::uint32_t t) {
     const std::uint32_t above = t_.parent[t];
-    t_.left[q] = t;
-    t_.right[q] = x;
-    t_.parent[t] = t_.parent[x] = q;
     t_.box[q] = merged(t_.box[t], t_.box[x]);
+    const int axis = t_.box[q].largest_axis();
+    const bool x_first = t_.box[x].center()[axis] < t_.box[t].center()[axis];
+    t_.left[q] = x_first ? x : t;
+    t_.right[q] = x_first ? t : x;
+    t_.parent[t] = t_.parent[x] = q;
     if (above == kNone) {
       t_.root = q;
       t_.parent[q] = kNone;
