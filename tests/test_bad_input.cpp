@@ -304,6 +304,9 @@ TEST(BadInputTool, NegativeCountsGiveOneErrorLine) {
       {"sweep --plan quick --check --shard 1/-2", "1/-2"},
       {"merge --plan quick --shards -1 --out /tmp/raylab_negative_merge.csv /tmp/raylab_negative_shard.csv", "--shards"},
       {"predict --scene sphere:n=64 --accel bvh --threads -1", "--threads -1"},
+      {"trace --scene sphere:n=64 --accel bvh:optimize_passes=-1", "optimize_passes"},
+      {"trace --scene sphere:n=64 --accel bvh:optimize_budget=-1", "optimize_budget"},
+      {"trace --scene sphere:n=64 --accel bvh:optimize=treelet", "optimize"},
   };
   fs::remove("/tmp/raylab_negative_threads.png");
   fs::remove("/tmp/raylab_negative_merge.csv");

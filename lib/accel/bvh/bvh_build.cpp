@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "accel/bvh/bvh_builders.h"
+#include "accel/bvh/bvh_optimize.h"
 #include "accel/kdtree/sah_cost.h"
 
 namespace raylab {
@@ -103,6 +104,12 @@ class MidpointMedianBuilder {
   std::vector<Bvh2Node> nodes_;
 };
 
+Bvh2 optimized(Bvh2 bvh, const BvhConfig& config) {
+  if (config.optimize == BvhOptimize::reinsert)
+    optimize_bvh_reinsertion(bvh, config.cost, config.optimize_passes, config.optimize_budget);
+  return bvh;
+}
+
 void check_reference_count(std::size_t n) {
   if (n >= std::numeric_limits<std::uint32_t>::max()) throw std::length_error("build_bvh: more than 2^32 - 1 primitives");
 }
@@ -113,19 +120,19 @@ Bvh2 build_bvh_over_boxes(const std::vector<Bounds3f>& boxes, const BvhConfig& c
   check_reference_count(boxes.size());
   switch (config.builder) {
     case BvhBuilder::midpoint:
-    case BvhBuilder::median: return MidpointMedianBuilder(boxes, config).build();
-    case BvhBuilder::sweep: return build_bvh_sweep_sah(boxes, config);
+    case BvhBuilder::median: return optimized(MidpointMedianBuilder(boxes, config).build(), config);
+    case BvhBuilder::sweep: return optimized(build_bvh_sweep_sah(boxes, config), config);
     case BvhBuilder::binned:
     case BvhBuilder::spatial: break;
   }
-  return build_bvh_binned_sah(boxes, config);
+  return optimized(build_bvh_binned_sah(boxes, config), config);
 }
 
 Bvh2 build_bvh(const Scene& scene, const BvhConfig& config) {
-  if (config.builder == BvhBuilder::spatial) return build_bvh_spatial(scene, config);
+  if (config.builder == BvhBuilder::spatial) return optimized(build_bvh_spatial(scene, config), config);
   if (config.builder == BvhBuilder::binned) {
     check_reference_count(scene.primitive_count());
-    return build_bvh_binned_sah(scene, config);
+    return optimized(build_bvh_binned_sah(scene, config), config);
   }
   std::vector<Bounds3f> boxes(scene.primitive_count());
   for (std::size_t i = 0; i < boxes.size(); ++i) boxes[i] = scene.primitive_bounds(static_cast<unsigned>(i));

@@ -1,7 +1,8 @@
 #pragma once
 /// Building the binary BVH (bvh_node.h): the lecture's midpoint and median splits, the
 /// full-sweep and binned SAH, and spatial splits (SBVH). Builders are deterministic: equal
-/// inputs give equal trees with any thread count.
+/// inputs give equal trees with any thread count. Both entry points then optimise the tree as
+/// config.optimize asks (bvh_optimize.h), deterministically unless config.optimize_budget is set.
 #include <vector>
 
 #include "accel/bvh/bvh_config.h"

@@ -14,6 +14,12 @@ enum class BvhBuilder {
   spatial,   ///< SBVH: binned SAH plus spatial splits (Stich, Friedrich and Dietrich 2009)
 };
 
+/// Optimisation of the binary tree after the build, before any wide collapse (bvh_optimize.h).
+enum class BvhOptimize {
+  none,
+  reinsert,  ///< reinsertion (Bittner, Hapala and Havran 2013) under `cost`
+};
+
 /// The SAH of a BVH (MacDonald and Booth 1990; the lecture's Cost = N_A·S_A + N_B·S_B):
 ///   node cost = c_trav + c_isect·(N_A·SA(A) + N_B·SA(B)) / SA(node),   leaf cost = c_isect·N,
 /// where a count N is rounded up to whole blocks of `leaf_block` primitives (bvh_leaf_units).
@@ -50,8 +56,12 @@ struct BvhConfig {
   double spatial_alpha = 1e-5;
   /// SBVH: the references may grow to at most (1 + max_duplication)·N, N the primitive count.
   double max_duplication = 1.0;
-  /// Post-build reinsertion optimisation (Bittner, Hapala and Havran 2013).
-  bool reinsert = false;
+  BvhOptimize optimize = BvhOptimize::none;
+  /// Optimisation passes at most; 0 runs until the SAH cost stops improving (bvh_optimize.h).
+  int optimize_passes = 0;
+  /// Optimisation wall time at most, in seconds, checked between passes; 0 gives no limit (a
+  /// limit makes the tree depend on the machine's speed).
+  double optimize_budget = 0.0;
   /// Ize's conservative slab test and the watertight triangle kernel; off gives the `fast`
   /// variant (plain slab test, Moller-Trumbore), held by the oracle suite to its stated bound.
   bool robust = true;
