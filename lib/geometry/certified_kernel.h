@@ -144,8 +144,9 @@ struct CertifiedKernel {
   ///    λ_q = |U_q|/Σ|U| exact (U_q the exact edge function of vertex q). With D = Σ|Û| and every
   ///    |Û_q - U_q| <= B, Σ_q |λ_q - λ̂_q| <= 6B/(D - 3B) for λ̂_q = |Û_q|/D, and Σ(λ_q - λ̂_q) = 0,
   ///    so |Σ λ_q ẑ_q - Σ λ̂_q ẑ_q| <= 3B/(D - 3B)·(ẑ_max - ẑ_min) <= 3.8·(B/D)·(ẑ_max - ẑ_min)
-  ///    once D >= 16B. The float evaluation t̂ = fl(fl(Σ fl(|Û_q|·ẑ_q)) / fl(D)) is within
-  ///    6.3u·max|ẑ| + 5μ/D of Σ λ̂_q ẑ_q (|Σ λ̂_q ẑ_q| <= max|ẑ|; 5μ/D <= 2^-63 once D >= 2^-60),
+  ///    once D >= 16B. The float evaluation t̂ = fl(fl(Σ fl(|Û_q|·ẑ_q))·fl(1/fl(D))) is within
+  ///    7.3u·max|ẑ| + 5μ/D of Σ λ̂_q ẑ_q (|Σ λ̂_q ẑ_q| <= max|ẑ|; 5μ/D <= 2^-63 once D >= 2^-60;
+  ///    D <= 2^120 keeps 1/D normal),
   ///    and Σ λ_q ẑ_q within 3.2u·max|ẑ| + 2^-63 of t. Hence
   ///      |t̂ - t| <= E = 7·(B/D)·(ẑ_max - ẑ_min) + 2^-19·max|ẑ| + 2^-60,
   ///    the larger constants covering the roundings of E, t̂ - E and t̂ + E. The interval is a few
@@ -161,9 +162,10 @@ struct CertifiedKernel {
     const float zmin = std::min(std::min(za, zb), zc), zmax = std::max(std::max(za, zb), zc);
     const float aU = std::abs(U), aV = std::abs(V), aW = std::abs(W), D = aU + aV + aW;
     const bool certain = (U > B && V > B && W > B) || (U < -B && V < -B && W < -B);
-    if (certain && D >= 16.0f * B && D >= 0x1p-60f) {
-      t = (aU * za + aV * zb + aW * zc) / D;
-      const float E = 7.0f * (B / D) * (zmax - zmin) + 0x1p-19f * std::max(std::abs(zmin), std::abs(zmax)) + 0x1p-60f;
+    if (certain && D >= 16.0f * B && D >= 0x1p-60f && D <= 0x1p120f) {
+      const float inv_D = 1.0f / D;
+      t = (aU * za + aV * zb + aW * zc) * inv_D;
+      const float E = 7.0f * (B * inv_D) * (zmax - zmin) + 0x1p-19f * std::max(std::abs(zmin), std::abs(zmax)) + 0x1p-60f;
       if (std::abs(t) <= 0x1p127f && E <= 0x1p127f) {
         lo = t - E, hi = t + E;
         return true;

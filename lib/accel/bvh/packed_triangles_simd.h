@@ -146,13 +146,16 @@ struct PacketKernel<CertifiedKernel> {
   static int intersect_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
     static_assert(kLanes == kPacketWidth || kLanes == 2 * kPacketWidth);
     using F = simd::Float<kLanes>;
-    unsigned filled = (1u << p[0].size()) - 1;
-    if constexpr (kLanes == 2 * kPacketWidth) filled |= ((1u << p[1].size()) - 1) << kPacketWidth;
+    const auto filled_lanes = [p] {
+      unsigned m = (1u << p[0].size()) - 1;
+      if constexpr (kLanes == 2 * kPacketWidth) m |= ((1u << p[1].size()) - 1) << kPacketWidth;
+      return m;
+    };
     const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
     const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
     if (!c.filter) {  // no float filter for this ray: every lane is decided exactly
       int last = -1;
-      for (unsigned m = filled; m != 0; m &= m - 1) {
+      for (unsigned m = filled_lanes(); m != 0; m &= m - 1) {
         const int i = std::countr_zero(m);
         if (CertifiedKernel::intersect(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), hit)) {
           last = i;
@@ -177,8 +180,9 @@ struct PacketKernel<CertifiedKernel> {
                 F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-119f) * (F::broadcast(1.0f) + S + Z);
     const F nB = F::broadcast(0.0f) - B;
     const unsigned pos = (U > B) | (V > B) | (W > B), neg = (U < nB) | (V < nB) | (W < nB);
-    unsigned open = filled & ~(pos & neg);
+    unsigned open = ~(pos & neg) & ((1u << kLanes) - 1);
     if (open == 0) return -1;
+    open &= filled_lanes();  // unused lanes (NaN vertices) are open
     // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
     // the exact t of every lane, the plane crossing's where the edge functions certify a
     // crossing of the interior, else the vertices' depth range.
@@ -191,9 +195,10 @@ struct PacketKernel<CertifiedKernel> {
       const F aU = abs(U), aV = abs(V), aW = abs(W), D = aU + aV + aW;
       const F tiny = F::broadcast(0x1p-60f), big = F::broadcast(0x1p127f);
       const unsigned certain = ((U > B) & (V > B) & (W > B)) | ((U < nB) & (V < nB) & (W < nB));
-      const F t = (aU * za + aV * zb + aW * zc) / D;
-      const F E = F::broadcast(7.0f) * (B / D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
-      crossing = open & certain & (D >= F::broadcast(16.0f) * B) & (D >= tiny) & (abs(t) <= big) & (E <= big);
+      const F inv_D = F::broadcast(1.0f) / D;
+      const F t = (aU * za + aV * zb + aW * zc) * inv_D;
+      const F E = F::broadcast(7.0f) * (B * inv_D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
+      crossing = open & certain & (D >= F::broadcast(16.0f) * B) & (D >= tiny) & (D <= F::broadcast(0x1p120f)) & (abs(t) <= big) & (E <= big);
       const F range_lo = zmin - (F::broadcast(0x1p-20f) * abs(zmin) + tiny);
       const F range_hi = zmax + (F::broadcast(0x1p-20f) * abs(zmax) + tiny);
       const F t_lo = t - E, t_hi = t + E;
