@@ -267,6 +267,7 @@ struct CertifiedKernel {
   /// where the edge functions' error B multiplies only the triangle's own depth extent, not the
   /// distance to it: the enclosure is a few float ulps of t wide, as tight as the float t itself.
   static Interval plane_t(const Context& c, float U, float V, float W, float B, float az, float bz, float cz) {
+    interval_stage_taken_on_this_thread() = true;
     const Interval u = Interval::rounded(double(U) - B, double(U) + B);
     const Interval v = Interval::rounded(double(V) - B, double(V) + B);
     const Interval w = Interval::rounded(double(W) - B, double(W) + B);
@@ -289,6 +290,7 @@ struct CertifiedKernel {
   /// crosses its interior, at a t in `t`; 0: undecided (the line meets an edge or a vertex,
   /// lies in the plane, or passes within ~2^-50 of one).
   static int triangle_t(const Context& c, const Shape& tri, Interval& t) {
+    interval_stage_taken_on_this_thread() = true;
     const Interval dz = Interval::of_float(c.ray.dir[c.kz]);
     const Interval sx = Interval::of_float(c.ray.dir[c.kx]) / dz, sy = Interval::of_float(c.ray.dir[c.ky]) / dz;
     const Interval ox = Interval::of_float(c.ray.org[c.kx]), oy = Interval::of_float(c.ray.org[c.ky]),
@@ -312,6 +314,7 @@ struct CertifiedKernel {
   /// The sphere's first root not before tmin, enclosed in double interval arithmetic: -1 no
   /// hit in [tmin, tmax] surely; 1 the root is in `t`, surely in [tmin, tmax]; 0 undecided.
   static int sphere_t(const Context& c, const Sphere& s, Interval& t) {
+    interval_stage_taken_on_this_thread() = true;
     Interval oc[3], d[3];
     for (int k = 0; k < 3; ++k) {
       oc[k] = Interval::of_float(c.ray.org[k]) - Interval::of_float(s.center[k]);

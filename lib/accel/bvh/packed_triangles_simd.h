@@ -5,8 +5,8 @@
 ///   int lane = PacketKernel<Kernel>::intersect<kAnyHit>(ctx, pr, packet, hit);
 ///   int lane = PacketKernel<Kernel>::intersect_lanes<kAnyHit, 8>(ctx, pr, &packets[i], hit);
 ///
-/// intersect_lanes<kAnyHit, 8> (watertight and Möller-Trumbore) tests two consecutive packets
-/// as one 8-lane packet (lane 4k + i is lane i of packet k), one AVX test where a leaf holds two.
+/// intersect_lanes<kAnyHit, 8> (every kernel here) tests two consecutive packets as one 8-lane
+/// packet (lane 4k + i is lane i of packet k), one AVX test where a leaf holds two.
 /// Contract: `intersect` returns the lane that the scalar Kernel, offered the packet's
 /// triangles in lane order, would have reported last (the closest hit strictly before
 /// ctx's current closest, the lowest lane among equal t), or -1; it updates ctx as the scalar
@@ -17,12 +17,17 @@
 ///    contraction), and lanes with an edge function equal to zero redo the paper's
 ///    double-precision fallback in scalar, so decisions, t, u and v are bit-identical.
 ///  - Möller-Trumbore (JGT 1997), the fast variant: fused multiply-adds, no bit-identity claim.
-///  - Certified (certified_kernel.h): the edge functions and their error bound B for four
-///    triangles at once, by the same IEEE operations the bound's derivation counts; lanes whose
-///    edge functions surely have opposite signs are misses, every other filled lane goes, in
-///    lane order, to CertifiedKernel::decide_triangle with its U, V, W and B, which certifies or
-///    asks the exact path. The contract holds with "the scalar Kernel" read as "the certified
-///    kernel": the reported lane is the last one that became the first hit.
+///  - Certified (certified_kernel.h): the edge functions and their error bound B for all lanes
+///    at once, by the same IEEE operations the bound's derivation counts; lanes whose edge
+///    functions surely have opposite signs are misses. For the others, CertifiedKernel::
+///    depth_bounds' float enclosure of t, computed for all lanes with its operations, rejects
+///    the lanes surely before tmin or after the current first hit; the rest go, nearest lower
+///    bound first (lane order with kAnyHit), to CertifiedKernel::decide_crossing (the enclosure
+///    is the plane crossing's) or decide_triangle, which certify or ask the double stage and
+///    the exact path, and each new first hit drops the lanes whose lower bound lies beyond it.
+///    The contract holds with "the scalar Kernel" read as "the certified kernel" (which does not
+///    depend on the order in which a ray's candidates are offered): the reported lane is the
+///    last one that became the first hit.
 #include <bit>
 #include <cmath>
 #include <cstdint>
