@@ -180,12 +180,11 @@ struct PacketKernel<CertifiedKernel> {
     const F V = ax * cy - ay * cx;
     const F W = bx * ay - by * ax;
     const F S = max(max(abs(ax) + abs(ay), abs(bx) + abs(by)), abs(cx) + abs(cy));
-    const F Z = max(max(abs(az0), abs(bz0)), abs(cz0));
-    const F B = S * (F::broadcast(14.0f * 0x1p-24f) * S + F::broadcast(32.0f * 0x1p-24f) * Z) +
-                F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-119f) * (F::broadcast(1.0f) + S + Z);
+    const F M = max(S, max(max(abs(az0), abs(bz0)), abs(cz0)));
+    const F B = M * (F::broadcast(48.0f * 0x1p-24f) * M) + F::broadcast(0x1p-119f) * ((M + M) + F::broadcast(1.0f));
     const F nB = F::broadcast(0.0f) - B;
-    const unsigned pos = (U > B) | (V > B) | (W > B), neg = (U < nB) | (V < nB) | (W < nB);
-    unsigned open = ~(pos & neg) & ((1u << kLanes) - 1);
+    const F hi_edge = max(max(U, V), W), lo_edge = min(min(U, V), W);
+    unsigned open = ~((hi_edge > B) & (lo_edge < nB)) & ((1u << kLanes) - 1);
     if (open == 0) return -1;
     open &= filled_lanes();  // unused lanes (NaN vertices) are open
     // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
@@ -199,7 +198,7 @@ struct PacketKernel<CertifiedKernel> {
       const F zmin = min(min(za, zb), zc), zmax = max(max(za, zb), zc);
       const F aU = abs(U), aV = abs(V), aW = abs(W), D = aU + aV + aW;
       const F tiny = F::broadcast(0x1p-60f), big = F::broadcast(0x1p127f);
-      const unsigned certain = ((U > B) & (V > B) & (W > B)) | ((U < nB) & (V < nB) & (W < nB));
+      const unsigned certain = (lo_edge > B) | (hi_edge < nB);
       const F inv_D = F::broadcast(1.0f) / D;
       const F t = (aU * za + aV * zb + aW * zc) * inv_D;
       const F E = F::broadcast(7.0f) * (B * inv_D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
