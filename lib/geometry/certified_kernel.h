@@ -30,12 +30,10 @@
 /// (the first terms from the inputs' errors, the fourth from the three roundings of Û). With
 /// S = max_q S_q and Z = max_q Z_q over the triangle's three vertices, one bound serves U, V, W:
 ///   |Û - U| <= 12.2u·S² + 30.1u·S·Z + 450u²·Z² + μ·(33·S + 5) + (smaller terms),
-/// <= 42.4u·M² + μ·(33·M + 5) + (smaller terms) with M = max(S, Z), which edge_bound() rounds
-/// up to B = M·(48u·M) + 2^-119·(2M + 1): the larger constants absorb the rounding of B's own
-/// evaluation (five operations, a relative 5u), and the μ term the flushing of B's own products
-/// (one bound from M alone: fewer operations per lane than separate S and Z terms, and at most
-/// 3.5 times wider, which the filter's decisions hardly notice). Overflow makes B infinite and
-/// every comparison with it false, NaN likewise: such a triangle goes to the exact path.
+/// which edge_bound() rounds up to B = S·(14u·S + 32u·Z) + 2^-38·Z² + 2^-119·(1 + S + Z): the
+/// larger constants absorb the rounding of B's own evaluation (six operations, a relative
+/// 6u), and the μ term the flushing of B's own products. Overflow makes B infinite and every
+/// comparison with it false, NaN likewise: such a triangle goes to the exact path.
 ///
 /// Decisions, in three stages (the filters of CGAL's kernels: static, dynamic, exact):
 ///  1. float: a sign is certain when |Û| > B. Two certain opposite signs: the line misses the
@@ -127,8 +125,7 @@ struct CertifiedKernel {
   /// The edge-function bound B of the derivation above, from S = max_q (|Q̂x| + |Q̂y|) and
   /// Z = max_q |a_kz| over the triangle's vertices.
   static float edge_bound(float S, float Z) {
-    const float M = std::max(S, Z);
-    return M * (48.0f * 0x1p-24f * M) + 0x1p-119f * ((M + M) + 1.0f);
+    return S * (14.0f * 0x1p-24f * S + 32.0f * 0x1p-24f * Z) + 0x1p-38f * (Z * Z) + 0x1p-119f * (1.0f + S + Z);
   }
 
   /// The depth bounds: floats lo <= hi around the exact t of every point where the line meets the

@@ -180,8 +180,9 @@ struct PacketKernel<CertifiedKernel> {
     const F V = ax * cy - ay * cx;
     const F W = bx * ay - by * ax;
     const F S = max(max(abs(ax) + abs(ay), abs(bx) + abs(by)), abs(cx) + abs(cy));
-    const F M = max(S, max(max(abs(az0), abs(bz0)), abs(cz0)));
-    const F B = M * (F::broadcast(48.0f * 0x1p-24f) * M) + F::broadcast(0x1p-119f) * ((M + M) + F::broadcast(1.0f));
+    const F Z = max(max(abs(az0), abs(bz0)), abs(cz0));
+    const F B = S * (F::broadcast(14.0f * 0x1p-24f) * S + F::broadcast(32.0f * 0x1p-24f) * Z) +
+                F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-119f) * (F::broadcast(1.0f) + S + Z);
     const F nB = F::broadcast(0.0f) - B;
     const F hi_edge = max(max(U, V), W), lo_edge = min(min(U, V), W);
     unsigned open = ~((hi_edge > B) & (lo_edge < nB)) & ((1u << kLanes) - 1);
