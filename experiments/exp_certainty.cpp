@@ -4,13 +4,17 @@
 // alternated, best kept); certified against watertight for every structure; the fraction of rays
 // that take the certified kernel's exact path per ray kind, and its time per ray against the exact
 // oracle `exact`. Accuracy per class is exp_robustness's.
-// Writes certainty.csv, certainty_exact_path.csv and certainty.md (a subsection of the robustness
+// Certified against watertight on meshes no test uses, every structure and BVH width, with the
+// shares of rays reaching each stage of the certified kernel (issue 31; --claim
+// certified-structures runs this part alone).
+// Writes certainty.csv, certainty_exact_path.csv, certainty_structures.csv and certainty.md (a subsection of the robustness
 // section in the report).
 #include <fmt/format.h>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/replicates.h"
 #include "experiment_common.h"
 #include "geometry/input_error.h"
 #include "scene/scene_spec.h"
@@ -32,14 +36,98 @@ std::vector<double> alternated_best_seconds(const std::vector<const Aggregate*>&
   return best;
 }
 
+/// Certified against watertight on meshes no test uses (issue 31): every structure and BVH width
+/// on primary, diffuse and shadow rays, on a mesh near the origin and one far from it. Each row's
+/// ratio is the best certified time over the best watertight time (alternated rounds in one
+/// process), beside the median of the per-round ratios with its bootstrap 95% interval
+/// (cost/replicates.h); the stage shares come from a counted run of the certified structure.
+std::string certified_ratio_table(const Options& opt) {
+  const std::vector<std::string> scene_specs =
+      opt.full() ? std::vector<std::string>{"cgal:camel", "transformed:of=cgal:elephant,translate=1e4:0:0",
+                                            "transformed:of=cgal:camel,scale=1e-4",
+                                            "subdivided:of=cgal:cow,levels=1"}
+                 : std::vector<std::string>{"cgal:camel", "transformed:of=cgal:elephant,translate=1e4:0:0"};
+  const std::size_t n = opt.full() ? 100000 : 20000;
+  const int reps = opt.full() ? 9 : 5;
+  const std::vector<std::string> structures = {"grid", "nested-grid", "kdtree", "octree", "bsp",
+                                               "bvh:width=2", "bvh:width=4", "bvh"};
+  CsvWriter csv(opt.out + "/certainty_structures.csv",
+                {"scene", "triangles", "structure", "rays", "rays_count", "watertight_ns_per_ray",
+                 "certified_ns_per_ray", "ratio_best", "ratio_median", "ratio_lo", "ratio_hi",
+                 "interval_stage_per_ray", "exact_fallbacks_per_ray"});
+  std::string md = fmt::format(
+      "\nCertified against watertight on meshes no test uses, one near the origin and one far from it "
+      "(issue 31): single-thread time per ray of every structure with `kernel=certified` over the same "
+      "structure with the watertight kernel, {} rays of each kind ({} for the grids), in one process, runs alternated {} times. "
+      "*best*: the best certified time over the best watertight time; *median [95%]*: the median of the "
+      "per-round ratios with its bootstrap interval. *float only*, *interval*, *exact*: the shares of rays "
+      "the certified kernel decided by its float filter alone, that reached its double (interval) stage, "
+      "and that reached the exact path (`interval_stage_per_ray`, `exact_fallbacks_per_ray` of `raylab "
+      "trace`). Goal of issue 31: certified / watertight <= 1.10 everywhere.\n\n"
+      "| scene | structure | rays | watertight ns/ray | certified ns/ray | best | median [95%] | float only | "
+      "interval | exact |\n|---|---|---|---|---|---|---|---|---|---|\n",
+      n, n / 20, reps);
+  double worst = 0.0;
+  std::string worst_case;
+  for (const auto& scene_spec : scene_specs) {
+    std::shared_ptr<const Scene> scene;
+    try {
+      scene = make_scene(scene_spec);
+    } catch (const InputError& e) {
+      progress(std::string("certainty: skipping ") + e.what());
+      continue;
+    }
+    // The grids get a twentieth of the rays: far from the origin their cell intervals widen with
+    // |o| (cell_widening) and a ray costs tens of microseconds in either kernel.
+    std::vector<std::pair<std::string, std::vector<Ray>>> ray_sets, grid_ray_sets;
+    for (const std::string kind : {"primary", "diffuse", "shadow"}) {
+      ray_sets.emplace_back(kind, make_ray_set(kind + ":" + std::to_string(n), scene));
+      grid_ray_sets.emplace_back(kind, make_ray_set(kind + ":" + std::to_string(n / 20), scene));
+    }
+    for (const auto& base : structures) {
+      const std::string certified = base + (base.find(':') == std::string::npos ? ":" : ",") + "kernel=certified";
+      progress(fmt::format("certainty: certified against watertight, {} {}", scene_spec, base));
+      const auto wt = make_accelerator(base, scene), cert = make_accelerator(certified, scene);
+      for (const auto& [kind, rays] : base.find("grid") != std::string::npos ? grid_ray_sets : ray_sets) {
+        const bool any_hit = kind == "shadow";
+        const TraceOptions timed{1, false, any_hit};
+        double best_wt = 1e300, best_cert = 1e300;
+        std::vector<double> ratios;
+        for (int r = 0; r < reps; ++r) {
+          const double a = trace_rays(*wt, rays, timed).thread_cpu_seconds;
+          const double b = trace_rays(*cert, rays, timed).thread_cpu_seconds;
+          best_wt = std::min(best_wt, a), best_cert = std::min(best_cert, b);
+          ratios.push_back(b / a);
+        }
+        const RayCounters counted = trace_rays(*cert, rays, TraceOptions{1, true, any_hit}).counters;
+        const double count = static_cast<double>(rays.size());
+        const double interval = counted.interval_stage / count, exact = counted.exact_fallbacks / count;
+        const double ratio = best_cert / best_wt;
+        const IntervalEstimate med = bootstrap_median(ratios);
+        if (ratio > worst) worst = ratio, worst_case = fmt::format("`{}` on `{}`, {} rays", base, scene_spec, kind);
+        md += fmt::format("| `{}` | `{}` | {} | {:.1f} | {:.1f} | {:.3f} | {:.3f} [{:.3f}, {:.3f}] | {:.2f}% | {:.2f}% | "
+                          "{:.3f}% |\n",
+                          scene_spec, base, kind, best_wt / count * 1e9, best_cert / count * 1e9, ratio, med.value,
+                          med.lo, med.hi, 100.0 * (1.0 - interval), 100.0 * interval, 100.0 * exact);
+        csv.row(scene_spec, scene->mesh.size(), base, kind, rays.size(), best_wt / count * 1e9,
+                best_cert / count * 1e9, ratio, med.value, med.lo, med.hi, interval, exact);
+      }
+    }
+  }
+  md += fmt::format("\nWorst case: certified / watertight **{:.3f}** ({}; goal <= 1.10: {}). CSV: "
+                    "certainty_structures.csv.\n",
+                    worst, worst_case, worst <= 1.10 ? "met" : "not met");
+  return md;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const Options opt = parse_options(argc, argv, "the cost of certainty: fast, robust and certified paths against Embree");
   try {
     std::string md;
-    // The cost of certainty.
-    {
+    // The cost of certainty (every part but the per-structure ratios when --claim certified-structures).
+    if (opt.claim.empty()) {
       const std::vector<std::string> scene_specs =
           opt.full() ? std::vector<std::string>{"cgal:bunny00", "cgal:refined_elephant", "cgal:armadillo",
                                                 "sphereflake:depth=3,as=triangles"}
@@ -170,6 +258,8 @@ int main(int argc, char** argv) {
                         "faster than `exact` (goal >= 10x: {}).\n",
                         worst_speedup, worst_speedup >= 10.0 ? "met" : "not met");
     }
+
+    if (opt.runs_claim({"certified-structures"})) md += certified_ratio_table(opt);
 
     md += fmt::format("\nMeasured by `build/experiments/exp_certainty --mode {}` (run by `./lab report`); CSV: "
                       "certainty.csv, certainty_exact_path.csv. {}.\n",

@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "accel/bvh/packed_triangles_simd.h"
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
@@ -139,6 +140,91 @@ TEST(CertifiedKernel, AgreesWithTheExactFirstHitOnRandomAndFeatureAimedRays) {
   }
   EXPECT_GT(exact_paths, 0u);
   EXPECT_LT(exact_paths, rays) << "the float filter certified nothing";
+}
+
+/// `tris` packed in order, kPacketWidth to a packet (unused lanes as pack_leaf leaves them).
+std::vector<TrianglePacket> packed(const std::vector<Tri>& tris) {
+  std::vector<TrianglePacket> out((tris.size() + kPacketWidth - 1) / kPacketWidth);
+  for (auto& p : out)
+    for (int l = 0; l < kPacketWidth; ++l) {
+      p.prim[l] = kInvalidId;
+      for (int k = 0; k < 3; ++k)
+        for (int a = 0; a < 3; ++a) p.v[k][a][l] = NAN;
+    }
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    TrianglePacket& p = out[i / kPacketWidth];
+    const int l = static_cast<int>(i % kPacketWidth);
+    p.prim[l] = static_cast<std::uint32_t>(i);
+    const Vec3f* v[3] = {&tris[i].a, &tris[i].b, &tris[i].c};
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) p.v[k][a][l] = (*v[k])[a];
+  }
+  return out;
+}
+
+// The packed test (two packets as one 8-lane test, then a 4-lane one), whose depth bounds reject
+// and certify most lanes in float and which visits lanes nearest first: on the same random and
+// feature-aimed configurations, near and far from the origin, the first hit is the exact one, and
+// an any-hit query finds a hit exactly when there is one in [tmin, tmax].
+TEST(CertifiedKernel, PackedLanesAgreeWithTheExactFirstHit) {
+  const FloatModeScope ftz(true);
+  Rng rng(5);
+  std::size_t rays = 0, hits = 0;
+  for (const double scale : {1e-30, 1e-4, 1.0, 1e4, 1e30}) {
+    for (int k = 0; k < 300; ++k) {
+      std::vector<Tri> tris;
+      const Vec3d offset = Vec3d(rng.uniform(), rng.uniform(), rng.uniform()) * (k % 3 == 0 ? 1e4 : 1.0);
+      auto point = [&] { return Vec3f((Vec3d(rng.uniform(), rng.uniform(), rng.uniform()) + offset) * scale); };
+      const Vec3f shared0 = point(), shared1 = point();
+      for (int t = 0; t < 6; ++t) tris.push_back({shared0, t % 2 ? shared1 : point(), point()});
+      for (int t = 0; t < 4; ++t) tris.push_back({point(), point(), point()});
+      const int kind = k % 3;
+      const Tri& on = tris[rng.below(tris.size())];
+      const Vec3f target = kind == 0 ? shared0 : kind == 1 ? Vec3f(Vec3d(on.a) * 0.5 + Vec3d(on.b) * 0.5) : point();
+      const Vec3d w(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
+      Ray ray;
+      if (kind == 0) {
+        if (!ray_exactly_through(target, w, 3.0 * scale, ray)) continue;
+      } else {
+        ray = Ray{Vec3f(Vec3d(target) - w * (3.0 * scale)), Vec3f(w * (3.0 * scale)), 0.0f, INFINITY};
+      }
+      if (k % 4 == 0) ray.tmax = 1.0f;
+      if (k % 7 == 0) ray.tmin = 0.5f;  // the origin half-way to the target: hits behind it are rejected
+      ++rays;
+      const std::vector<TrianglePacket> packets = packed(tris);
+      auto ctx = CertifiedKernel::prepare(ray);
+      const PacketKernel<CertifiedKernel>::Ray pr(ctx);
+      TriangleHit h;
+      int best = -1;
+      const int lane8 = PacketKernel<CertifiedKernel>::intersect_lanes<false, 8>(ctx, pr, packets.data(), h);
+      if (lane8 >= 0) best = lane8;
+      const int lane4 = PacketKernel<CertifiedKernel>::intersect<false>(ctx, pr, packets[2], h);
+      if (lane4 >= 0) best = 8 + lane4;
+      if (best >= 0) {
+        EXPECT_EQ(ctx.prim, static_cast<unsigned>(best));
+      }
+      hits += best >= 0;
+      EXPECT_TRUE(exactly_first(ray, tris, best)) << "scale " << scale << ", ray " << k << " (kind " << kind << ")";
+      auto any = CertifiedKernel::prepare(ray);
+      const bool blocked = PacketKernel<CertifiedKernel>::intersect_lanes<true, 8>(any, pr, packets.data(), h) >= 0 ||
+                           PacketKernel<CertifiedKernel>::intersect<true>(any, pr, packets[2], h) >= 0;
+      EXPECT_EQ(blocked, best >= 0) << "any-hit, scale " << scale << ", ray " << k;
+    }
+  }
+  EXPECT_GT(hits, rays / 10);
+}
+
+// The stage counters: a ray whose float filter decides everything reaches neither the double
+// stage nor the exact path; a ray exactly through a vertex reaches both.
+TEST(CertifiedKernel, CountsRaysThatReachedTheDoubleStage) {
+  const auto scene = make_scene("sphere:n=2000");
+  const auto accel = make_accelerator("bvh:kernel=certified", scene);
+  const std::vector<Ray> vertex_rays = make_ray_set("touching:64", scene), primary = make_ray_set("primary:1024", scene);
+  const RayCounters v = trace_rays(*accel, vertex_rays, TraceOptions{1, true, false}).counters;
+  EXPECT_EQ(v.interval_stage, vertex_rays.size());
+  const RayCounters p = trace_rays(*accel, primary, TraceOptions{1, true, false}).counters;
+  EXPECT_LT(p.interval_stage, primary.size() / 20) << "primary rays mostly certify in float alone";
+  EXPECT_LE(p.exact_fallbacks, p.interval_stage);
 }
 
 // Spheres: a ray tangent to a sphere touches it (decided exactly), and the roots of two spheres

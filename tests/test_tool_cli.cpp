@@ -148,6 +148,7 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(k["mismatches"], 0);
   EXPECT_EQ(k["within_stated_bound"], true);
   EXPECT_DOUBLE_EQ(k["exact_fallbacks_per_ray"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(k["interval_stage_per_ray"].get<double>(), 1.0) << "the exact path is reached through the double stage";
   // trace says which kernel ran and what it guarantees, as `raylab accels` states it.
   EXPECT_EQ(k["kernel"], "certified");
   EXPECT_EQ(k["guarantee"]["exact"], true);

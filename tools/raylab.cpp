@@ -263,6 +263,7 @@ int run_trace(const TraceCommand& o) {
   j["prim_hits_per_test"] = counters.prim_tests > 0 ? static_cast<double>(counters.prim_hits) / counters.prim_tests : 0.0;
   j["mailbox_skips_per_ray"] = n > 0 ? static_cast<double>(counters.mailbox_skips) / n : 0.0;
   j["exact_fallbacks_per_ray"] = n > 0 ? static_cast<double>(counters.exact_fallbacks) / n : 0.0;
+  j["interval_stage_per_ray"] = n > 0 ? static_cast<double>(counters.interval_stage) / n : 0.0;
   j["accel_bytes"] = stats.bytes;
   j["bytes_per_primitive"] = scene->total_primitive_count() > 0 ? stats.bytes / scene->total_primitive_count() : 0.0;
   j["accel_nodes"] = stats.nodes;

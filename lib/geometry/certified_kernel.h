@@ -84,6 +84,10 @@ struct CertifiedKernel {
     float sx = 0.0f, sy = 0.0f, sz = 0.0f;
     /// The float filter's preconditions hold (|d_kz| >= 2^-60): otherwise the double stage decides.
     bool filter = false;
+    /// The depth cull's preconditions hold as well (|d_kz| <= 2^100, so that sz = 1/d_kz is normal).
+    bool cull = false;
+    /// A float >= the exact t of the current first hit, or tmax while there is none (best_upper).
+    float upper = 0.0f;
     // The current first hit: its exact t lies in [lo, hi]; reach is closest() for traversal.
     bool has = false;
     /// [lo, hi] comes from the double stage or the exact path (not from the float filter).
@@ -109,17 +113,67 @@ struct CertifiedKernel {
     c.ray = ray;
     set_watertight_shear(c, ray.dir);
     c.filter = std::abs(ray.dir[c.kz]) >= 0x1p-60f && std::isfinite(c.sz);
+    c.cull = c.filter && std::abs(ray.dir[c.kz]) <= 0x1p100f;
+    c.upper = ray.tmax;
     c.reach = reach_of(ray.tmax);
     return c;
   }
   static float closest(const Context& c) { return c.reach; }
   /// A float >= the exact t of the current first hit, or tmax while there is none.
-  static float best_upper(const Context& c) { return c.has ? float_up(c.hi) : c.ray.tmax; }
+  static float best_upper(const Context& c) { return c.upper; }
 
   /// The edge-function bound B of the derivation above, from S = max_q (|Q̂x| + |Q̂y|) and
   /// Z = max_q |a_kz| over the triangle's vertices.
   static float edge_bound(float S, float Z) {
     return S * (14.0f * 0x1p-24f * S + 32.0f * 0x1p-24f * Z) + 0x1p-38f * (Z * Z) + 0x1p-119f * (1.0f + S + Z);
+  }
+
+  /// The depth bounds: floats lo <= hi around the exact t of every point where the line meets the
+  /// triangle (requires c.cull). A triangle with hi < tmin or lo > best_upper(c) cannot become
+  /// the first hit: most candidates of a leaf (those behind the origin, beyond the current first
+  /// hit or beyond tmax) are rejected in float, without the double stage; and where [lo, hi]
+  /// encloses the plane crossing, it certifies most hits without it too (decide_crossing).
+  /// Derivation, with
+  /// ẑ_q = fl(a_kz·sz) the computed (q_kz - o_kz)/d_kz (three roundings: |ẑ_q - z_q| <= 3.1u·|z_q|
+  /// + 2^-63, given 2^-60 <= |d_kz| <= 2^100):
+  ///  - Any point of the closed triangle is a convex combination of its vertices, so a point of
+  ///    the line on it has t = (p_kz - o_kz)/d_kz in [min_q z_q, max_q z_q]: the range test,
+  ///    [ẑ_min - 2^-20·|ẑ_min| - 2^-60, ẑ_max + 2^-20·|ẑ_max| + 2^-60] (16u covers the 3.1u of ẑ
+  ///    and the roundings of the bound itself).
+  ///  - When the float filter certifies that U, V, W share a sign, t = Σ λ_q z_q with
+  ///    λ_q = |U_q|/Σ|U| exact (U_q the exact edge function of vertex q). With D = Σ|Û| and every
+  ///    |Û_q - U_q| <= B, Σ_q |λ_q - λ̂_q| <= 6B/(D - 3B) for λ̂_q = |Û_q|/D, and Σ(λ_q - λ̂_q) = 0,
+  ///    so |Σ λ_q ẑ_q - Σ λ̂_q ẑ_q| <= 3B/(D - 3B)·(ẑ_max - ẑ_min) <= 3.8·(B/D)·(ẑ_max - ẑ_min)
+  ///    once D >= 16B. The float evaluation t̂ = fl(fl(Σ fl(|Û_q|·ẑ_q))·fl(1/fl(D))) is within
+  ///    7.3u·max|ẑ| + 5μ/D of Σ λ̂_q ẑ_q (|Σ λ̂_q ẑ_q| <= max|ẑ|; 5μ/D <= 2^-63 once D >= 2^-60;
+  ///    D <= 2^120 keeps 1/D normal),
+  ///    and Σ λ_q ẑ_q within 3.2u·max|ẑ| + 2^-63 of t. Hence
+  ///      |t̂ - t| <= E = 7·(B/D)·(ẑ_max - ẑ_min) + 2^-19·max|ẑ| + 2^-60,
+  ///    the larger constants covering the roundings of E, t̂ - E and t̂ + E. The interval is a few
+  ///    float ulps of t wide for a triangle far from degenerate, where the range test is as wide
+  ///    as the triangle's depth extent (the triangle under a diffuse or shadow ray's origin,
+  ///    crossed just behind it, needs the interval).
+  /// An overflow, an infinity or a NaN fails every comparison or is excluded: never culls.
+  /// Returns true when [lo, hi] encloses the plane crossing's t (the second case), with `t` the
+  /// float estimate t̂ inside it; false when it is the range test's [lo, hi].
+  static bool depth_bounds(const Context& c, float U, float V, float W, float B, float az, float bz, float cz, float& lo,
+                           float& hi, float& t) {
+    const float za = az * c.sz, zb = bz * c.sz, zc = cz * c.sz;
+    const float zmin = std::min(std::min(za, zb), zc), zmax = std::max(std::max(za, zb), zc);
+    const float aU = std::abs(U), aV = std::abs(V), aW = std::abs(W), D = aU + aV + aW;
+    const bool certain = (U > B && V > B && W > B) || (U < -B && V < -B && W < -B);
+    if (certain && D >= 16.0f * B && D >= 0x1p-60f && D <= 0x1p120f) {
+      const float inv_D = 1.0f / D;
+      t = (aU * za + aV * zb + aW * zc) * inv_D;
+      const float E = 7.0f * (B * inv_D) * (zmax - zmin) + 0x1p-19f * std::max(std::abs(zmin), std::abs(zmax)) + 0x1p-60f;
+      if (std::abs(t) <= 0x1p127f && E <= 0x1p127f) {
+        lo = t - E, hi = t + E;
+        return true;
+      }
+    }
+    lo = zmin - (0x1p-20f * std::abs(zmin) + 0x1p-60f);
+    hi = zmax + (0x1p-20f * std::abs(zmax) + 0x1p-60f);
+    return false;
   }
 
   static bool intersect(Context& c, unsigned prim, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, TriangleHit& hit) {
@@ -138,7 +192,28 @@ struct CertifiedKernel {
     const float Z = std::max(std::max(std::abs(az), std::abs(bz)), std::abs(cz));
     const float B = edge_bound(S, Z);
     if ((U > B || V > B || W > B) && (U < -B || V < -B || W < -B)) return false;  // surely misses
+    if (c.cull) {
+      float lo, hi, t = 0.0f;
+      const bool crossing = depth_bounds(c, U, V, W, B, az, bz, cz, lo, hi, t);
+      if (hi < c.ray.tmin || lo > c.upper) return false;
+      if (crossing) return decide_crossing(c, prim, p0, p1, p2, U, V, W, B, az, bz, cz, lo, hi, t, hit);
+    }
     return decide_triangle(c, prim, p0, p1, p2, U, V, W, B, az, bz, cz, hit);
+  }
+
+  /// decide_triangle for a triangle whose interior the line surely crosses at an exact t in
+  /// [lo, hi] (depth_bounds, the crossing case), t̂ = `t`: installed from that enclosure without
+  /// the double stage when it settles the interval ends and the order; else decide_triangle.
+  static bool decide_crossing(Context& c, unsigned prim, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, float U,
+                              float V, float W, float B, float az, float bz, float cz, float lo, float hi, float t,
+                              TriangleHit& hit) {
+    if (hi < c.ray.tmin || lo > c.ray.tmax || (c.has && double(lo) > c.hi)) return false;
+    if (!(lo >= c.ray.tmin && hi <= c.ray.tmax) || (c.has && !(double(hi) < c.lo)))
+      return decide_triangle(c, prim, p0, p1, p2, U, V, W, B, az, bz, cz, hit);
+    const float inv_det = 1.0f / (U + V + W);
+    install(c, prim, Interval{lo, hi}, TriangleHit{t, V * inv_det, W * inv_det}, triangle(p0, p1, p2), false, false);
+    hit = c.best;
+    return true;
   }
 
   /// The rest of intersect() for a triangle the float filter did not reject: U, V, W are the
@@ -192,6 +267,7 @@ struct CertifiedKernel {
   /// where the edge functions' error B multiplies only the triangle's own depth extent, not the
   /// distance to it: the enclosure is a few float ulps of t wide, as tight as the float t itself.
   static Interval plane_t(const Context& c, float U, float V, float W, float B, float az, float bz, float cz) {
+    interval_stage_taken_on_this_thread() = true;
     const Interval u = Interval::rounded(double(U) - B, double(U) + B);
     const Interval v = Interval::rounded(double(V) - B, double(V) + B);
     const Interval w = Interval::rounded(double(W) - B, double(W) + B);
@@ -214,6 +290,7 @@ struct CertifiedKernel {
   /// crosses its interior, at a t in `t`; 0: undecided (the line meets an edge or a vertex,
   /// lies in the plane, or passes within ~2^-50 of one).
   static int triangle_t(const Context& c, const Shape& tri, Interval& t) {
+    interval_stage_taken_on_this_thread() = true;
     const Interval dz = Interval::of_float(c.ray.dir[c.kz]);
     const Interval sx = Interval::of_float(c.ray.dir[c.kx]) / dz, sy = Interval::of_float(c.ray.dir[c.ky]) / dz;
     const Interval ox = Interval::of_float(c.ray.org[c.kx]), oy = Interval::of_float(c.ray.org[c.ky]),
@@ -237,6 +314,7 @@ struct CertifiedKernel {
   /// The sphere's first root not before tmin, enclosed in double interval arithmetic: -1 no
   /// hit in [tmin, tmax] surely; 1 the root is in `t`, surely in [tmin, tmax]; 0 undecided.
   static int sphere_t(const Context& c, const Sphere& s, Interval& t) {
+    interval_stage_taken_on_this_thread() = true;
     Interval oc[3], d[3];
     for (int k = 0; k < 3; ++k) {
       oc[k] = Interval::of_float(c.ray.org[k]) - Interval::of_float(s.center[k]);
@@ -337,7 +415,8 @@ struct CertifiedKernel {
     c.prim = prim;
     c.lo = t.lo;
     c.hi = t.hi;
-    c.reach = reach_of(float_up(t.hi));
+    c.upper = float_up(t.hi);
+    c.reach = reach_of(c.upper);
     c.best = th;
     c.shape = shape;
     c.best_in_exact = in_exact;

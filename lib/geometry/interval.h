@@ -60,6 +60,14 @@ inline Interval sqrt(const Interval& a) {
           Interval::widen_up(std::sqrt(std::max(0.0, a.hi)))};
 }
 
+/// Set to true on the calling thread whenever the certified kernel runs its double stage
+/// (certified_kernel.h: plane_t, triangle_t, sphere_t); AggregateBase reads and clears it to count
+/// RayCounters::interval_stage, as exact_path_taken_on_this_thread() for the exact path.
+inline bool& interval_stage_taken_on_this_thread() {
+  thread_local bool taken = false;
+  return taken;
+}
+
 /// The largest float <= x and the smallest float >= x (x a double; ±inf and NaN pass).
 inline float float_down(double x) {
   const float f = static_cast<float>(x);

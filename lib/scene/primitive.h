@@ -13,6 +13,7 @@
 
 #include "geometry/bounds.h"
 #include "geometry/exact_predicates.h"
+#include "geometry/interval.h"
 #include "geometry/ray.h"
 #include "scene/ray_counters.h"
 
@@ -64,14 +65,18 @@ class Aggregate : public Primitive {
 
 /// Counts one ray into RayCounters::exact_fallbacks when it took the exact path anywhere below
 /// the outermost counted aggregate call on this thread (nested aggregates, instances), read from
-/// exact_path_taken_on_this_thread(). Only the counted virtuals use it: timed runs pay nothing.
+/// exact_path_taken_on_this_thread(), and into RayCounters::interval_stage likewise from
+/// interval_stage_taken_on_this_thread(). Only the counted virtuals use it: timed runs pay nothing.
 class ExactPathTally {
  public:
   explicit ExactPathTally(RayCounters& counters) : counters_(counters) {
-    if (depth()++ == 0) exact_path_taken_on_this_thread() = false;
+    if (depth()++ == 0) exact_path_taken_on_this_thread() = false, interval_stage_taken_on_this_thread() = false;
   }
   ~ExactPathTally() {
-    if (--depth() == 0 && exact_path_taken_on_this_thread()) ++counters_.exact_fallbacks;
+    if (--depth() == 0) {
+      if (exact_path_taken_on_this_thread()) ++counters_.exact_fallbacks;
+      if (interval_stage_taken_on_this_thread()) ++counters_.interval_stage;
+    }
   }
   ExactPathTally(const ExactPathTally&) = delete;
   ExactPathTally& operator=(const ExactPathTally&) = delete;

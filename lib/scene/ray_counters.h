@@ -14,6 +14,9 @@ struct RayCounters {
   /// Rays that took the exact path (made an ExactFirstHit: the certified kernel's fallback, or
   /// every ray of the exact kernels), counted once per ray by AggregateBase.
   std::uint64_t exact_fallbacks = 0;
+  /// Rays for which the certified kernel ran its double (interval) stage, counted once per ray
+  /// as exact_fallbacks; the rest were decided by its float filter alone.
+  std::uint64_t interval_stage = 0;
 
   static constexpr bool enabled = true;
   void node() { ++nodes; }
@@ -24,6 +27,7 @@ struct RayCounters {
   RayCounters& operator+=(const RayCounters& o) {
     nodes += o.nodes; leaves += o.leaves; prim_tests += o.prim_tests; prim_hits += o.prim_hits; mailbox_skips += o.mailbox_skips;
     exact_fallbacks += o.exact_fallbacks;
+    interval_stage += o.interval_stage;
     return *this;
   }
 };

@@ -5,8 +5,8 @@
 ///   int lane = PacketKernel<Kernel>::intersect<kAnyHit>(ctx, pr, packet, hit);
 ///   int lane = PacketKernel<Kernel>::intersect_lanes<kAnyHit, 8>(ctx, pr, &packets[i], hit);
 ///
-/// intersect_lanes<kAnyHit, 8> (watertight and Möller-Trumbore) tests two consecutive packets
-/// as one 8-lane packet (lane 4k + i is lane i of packet k), one AVX test where a leaf holds two.
+/// intersect_lanes<kAnyHit, 8> (every kernel here) tests two consecutive packets as one 8-lane
+/// packet (lane 4k + i is lane i of packet k), one AVX test where a leaf holds two.
 /// Contract: `intersect` returns the lane that the scalar Kernel, offered the packet's
 /// triangles in lane order, would have reported last (the closest hit strictly before
 /// ctx's current closest, the lowest lane among equal t), or -1; it updates ctx as the scalar
@@ -17,12 +17,17 @@
 ///    contraction), and lanes with an edge function equal to zero redo the paper's
 ///    double-precision fallback in scalar, so decisions, t, u and v are bit-identical.
 ///  - Möller-Trumbore (JGT 1997), the fast variant: fused multiply-adds, no bit-identity claim.
-///  - Certified (certified_kernel.h): the edge functions and their error bound B for four
-///    triangles at once, by the same IEEE operations the bound's derivation counts; lanes whose
-///    edge functions surely have opposite signs are misses, every other filled lane goes, in
-///    lane order, to CertifiedKernel::decide_triangle with its U, V, W and B, which certifies or
-///    asks the exact path. The contract holds with "the scalar Kernel" read as "the certified
-///    kernel": the reported lane is the last one that became the first hit.
+///  - Certified (certified_kernel.h): the edge functions and their error bound B for all lanes
+///    at once, by the same IEEE operations the bound's derivation counts; lanes whose edge
+///    functions surely have opposite signs are misses. For the others, CertifiedKernel::
+///    depth_bounds' float enclosure of t, computed for all lanes with its operations, rejects
+///    the lanes surely before tmin or after the current first hit; the rest go, nearest lower
+///    bound first (lane order with kAnyHit), to CertifiedKernel::decide_crossing (the enclosure
+///    is the plane crossing's) or decide_triangle, which certify or ask the double stage and
+///    the exact path, and each new first hit drops the lanes whose lower bound lies beyond it.
+///    The contract holds with "the scalar Kernel" read as "the certified kernel" (which does not
+///    depend on the order in which a ray's candidates are offered): the reported lane is the
+///    last one that became the first hit.
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -127,36 +132,50 @@ struct PacketKernel<WatertightKernel> {
 
 template <>
 struct PacketKernel<CertifiedKernel> {
-  using F = simd::Float<kPacketWidth>;
+  /// The context's origin and shear in its sheared axis order, broadcast at each test.
   struct Ray {
-    F ox, oy, oz, sx, sy;
+    float ox, oy, oz, sx, sy, sz;
     Ray() = default;
     explicit Ray(const CertifiedKernel::Context& c)
-        : ox(F::broadcast(c.ray.org[c.kx])),
-          oy(F::broadcast(c.ray.org[c.ky])),
-          oz(F::broadcast(c.ray.org[c.kz])),
-          sx(F::broadcast(c.sx)),
-          sy(F::broadcast(c.sy)) {}
+        : ox(c.ray.org[c.kx]), oy(c.ray.org[c.ky]), oz(c.ray.org[c.kz]), sx(c.sx), sy(c.sy), sz(c.sz) {}
   };
 
   template <bool kAnyHit>
   static int intersect(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
-    const unsigned filled = (1u << p.size()) - 1;
+    return intersect_lanes<kAnyHit, kPacketWidth>(c, r, &p, hit);
+  }
+
+  /// The kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`, in the order
+  /// described below.
+  template <bool kAnyHit, int kLanes>
+  static int intersect_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
+    static_assert(kLanes == kPacketWidth || kLanes == 2 * kPacketWidth);
+    using F = simd::Float<kLanes>;
+    const auto filled_lanes = [p] {
+      unsigned m = (1u << p[0].size()) - 1;
+      if constexpr (kLanes == 2 * kPacketWidth) m |= ((1u << p[1].size()) - 1) << kPacketWidth;
+      return m;
+    };
+    const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
+    const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
     if (!c.filter) {  // no float filter for this ray: every lane is decided exactly
       int last = -1;
-      for (unsigned m = filled; m != 0; m &= m - 1) {
+      for (unsigned m = filled_lanes(); m != 0; m &= m - 1) {
         const int i = std::countr_zero(m);
-        if (CertifiedKernel::intersect(c, p.prim[i], p.vertex(i, 0), p.vertex(i, 1), p.vertex(i, 2), hit)) {
+        if (CertifiedKernel::intersect(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), hit)) {
           last = i;
           if constexpr (kAnyHit) return i;
         }
       }
       return last;
     }
-    const F az0 = F::load(p.v[0][c.kz]) - r.oz, bz0 = F::load(p.v[1][c.kz]) - r.oz, cz0 = F::load(p.v[2][c.kz]) - r.oz;
-    const F ax = (F::load(p.v[0][c.kx]) - r.ox) - r.sx * az0, ay = (F::load(p.v[0][c.ky]) - r.oy) - r.sy * az0;
-    const F bx = (F::load(p.v[1][c.kx]) - r.ox) - r.sx * bz0, by = (F::load(p.v[1][c.ky]) - r.oy) - r.sy * bz0;
-    const F cx = (F::load(p.v[2][c.kx]) - r.ox) - r.sx * cz0, cy = (F::load(p.v[2][c.ky]) - r.oy) - r.sy * cz0;
+    const F ox = F::broadcast(r.ox), oy = F::broadcast(r.oy), oz = F::broadcast(r.oz);
+    const F sx = F::broadcast(r.sx), sy = F::broadcast(r.sy);
+    const F az0 = load_lanes<kLanes>(p, 0, c.kz) - oz, bz0 = load_lanes<kLanes>(p, 1, c.kz) - oz,
+            cz0 = load_lanes<kLanes>(p, 2, c.kz) - oz;
+    const F ax = (load_lanes<kLanes>(p, 0, c.kx) - ox) - sx * az0, ay = (load_lanes<kLanes>(p, 0, c.ky) - oy) - sy * az0;
+    const F bx = (load_lanes<kLanes>(p, 1, c.kx) - ox) - sx * bz0, by = (load_lanes<kLanes>(p, 1, c.ky) - oy) - sy * bz0;
+    const F cx = (load_lanes<kLanes>(p, 2, c.kx) - ox) - sx * cz0, cy = (load_lanes<kLanes>(p, 2, c.ky) - oy) - sy * cz0;
     const F U = cx * by - cy * bx;
     const F V = ax * cy - ay * cx;
     const F W = bx * ay - by * ax;
@@ -165,20 +184,69 @@ struct PacketKernel<CertifiedKernel> {
     const F B = S * (F::broadcast(14.0f * 0x1p-24f) * S + F::broadcast(32.0f * 0x1p-24f) * Z) +
                 F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-119f) * (F::broadcast(1.0f) + S + Z);
     const F nB = F::broadcast(0.0f) - B;
-    const unsigned miss = ((U > B) | (V > B) | (W > B)) & ((U < nB) | (V < nB) | (W < nB));
-    unsigned open = filled & ~miss;
+    const F hi_edge = max(max(U, V), W), lo_edge = min(min(U, V), W);
+    unsigned open = ~((hi_edge > B) & (lo_edge < nB)) & ((1u << kLanes) - 1);
     if (open == 0) return -1;
-    alignas(16) float u[kPacketWidth], v[kPacketWidth], w[kPacketWidth], b[kPacketWidth], za[kPacketWidth],
-        zb[kPacketWidth], zc[kPacketWidth];
+    open &= filled_lanes();  // unused lanes (NaN vertices) are open
+    // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
+    // the exact t of every lane, the plane crossing's where the edge functions certify a
+    // crossing of the interior, else the vertices' depth range.
+    alignas(32) float lo[kLanes], hi[kLanes], ts[kLanes];
+    unsigned crossing = 0;
+    if (c.cull) {
+      const F sz = F::broadcast(r.sz);
+      const F za = az0 * sz, zb = bz0 * sz, zc = cz0 * sz;
+      const F zmin = min(min(za, zb), zc), zmax = max(max(za, zb), zc);
+      const F aU = abs(U), aV = abs(V), aW = abs(W), D = aU + aV + aW;
+      const F tiny = F::broadcast(0x1p-60f), big = F::broadcast(0x1p127f);
+      const unsigned certain = (lo_edge > B) | (hi_edge < nB);
+      const F inv_D = F::broadcast(1.0f) / D;
+      const F t = (aU * za + aV * zb + aW * zc) * inv_D;
+      const F E = F::broadcast(7.0f) * (B * inv_D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
+      crossing = open & certain & (D >= F::broadcast(16.0f) * B) & (D >= tiny) & (D <= F::broadcast(0x1p120f)) & (abs(t) <= big) & (E <= big);
+      const F range_lo = zmin - (F::broadcast(0x1p-20f) * abs(zmin) + tiny);
+      const F range_hi = zmax + (F::broadcast(0x1p-20f) * abs(zmax) + tiny);
+      const F t_lo = t - E, t_hi = t + E;
+      const F tmin = F::broadcast(c.ray.tmin), upper = F::broadcast(c.upper);
+      open &= ~((crossing & ((t_hi < tmin) | (t_lo > upper))) | (~crossing & ((range_hi < tmin) | (range_lo > upper))));
+      if (open == 0) return -1;
+      crossing &= open;
+      range_lo.store(lo), range_hi.store(hi);
+      if (crossing != 0) {
+        alignas(32) float tl[kLanes], th[kLanes];
+        t_lo.store(tl), t_hi.store(th), t.store(ts);
+        for (unsigned m = crossing; m != 0; m &= m - 1) {
+          const int i = std::countr_zero(m);
+          lo[i] = tl[i], hi[i] = th[i];
+        }
+      }
+    } else {
+      for (int i = 0; i < kLanes; ++i) lo[i] = -INFINITY;
+    }
+    alignas(32) float u[kLanes], v[kLanes], w[kLanes], b[kLanes], za[kLanes], zb[kLanes], zc[kLanes];
     U.store(u), V.store(v), W.store(w), B.store(b), az0.store(za), bz0.store(zb), cz0.store(zc);
+    // The open lanes, nearest lower depth bound first (lowest lane among equal ones; with kAnyHit
+    // in lane order): once a lane becomes the first hit, the lanes whose lower bound lies beyond
+    // it are dropped without the double stage.
     int last = -1;
-    for (; open != 0; open &= open - 1) {
-      const int i = std::countr_zero(open);
-      if (c.has && c.prim == p.prim[i]) continue;
-      if (CertifiedKernel::decide_triangle(c, p.prim[i], p.vertex(i, 0), p.vertex(i, 1), p.vertex(i, 2), u[i], v[i], w[i],
-                                           b[i], za[i], zb[i], zc[i], hit)) {
+    while (open != 0) {
+      int i = std::countr_zero(open);
+      if constexpr (!kAnyHit)
+        for (unsigned m = open & (open - 1); m != 0; m &= m - 1)
+          if (lo[std::countr_zero(m)] < lo[i]) i = std::countr_zero(m);
+      open &= ~(1u << i);
+      if (c.has && c.prim == prim(i)) continue;
+      const bool won =
+          (crossing >> i) & 1u
+              ? CertifiedKernel::decide_crossing(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), u[i], v[i], w[i],
+                                                 b[i], za[i], zb[i], zc[i], lo[i], hi[i], ts[i], hit)
+              : CertifiedKernel::decide_triangle(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), u[i], v[i], w[i],
+                                                 b[i], za[i], zb[i], zc[i], hit);
+      if (won) {
         last = i;
         if constexpr (kAnyHit) return i;
+        for (unsigned m = open; m != 0; m &= m - 1)
+          if (lo[std::countr_zero(m)] > c.upper) open &= ~(1u << std::countr_zero(m));
       }
     }
     return last;
@@ -288,8 +356,9 @@ inline bool intersect_triangle_packet(typename Kernel::Context& ctx, const typen
 
 /// Kernels with an 8-lane packet test (PacketKernel::intersect_lanes<kAnyHit, 8>).
 template <class Kernel>
-inline constexpr bool kPairedPackets =
-    std::is_same_v<Kernel, WatertightKernel> || std::is_same_v<Kernel, MollerTrumboreKernel>;
+inline constexpr bool kPairedPackets = std::is_same_v<Kernel, WatertightKernel> ||
+                                       std::is_same_v<Kernel, MollerTrumboreKernel> ||
+                                       std::is_same_v<Kernel, CertifiedKernel>;
 
 /// Offers a leaf's `count` packets from `packets` (pack_leaf's order: triangle packets, then
 /// sphere packets, tested scalar) to Kernel in order; true when one of them became the closest
