@@ -18,25 +18,30 @@ struct HeatmapImage {
 };
 
 /// Renders `images` (their accel and file set) of `scene` through `camera` at width × height and
-/// fills in their mean and largest costs. The colour scale runs from 0 to the largest cost of all
-/// the images.
+/// fills in their mean and largest costs. With `shared_scale`, one colour scale runs from the least
+/// to the largest cost of all the images, so that they compare; without, each image has its own,
+/// from its least to its largest cost (for images whose costs lie decades apart, where a shared
+/// scale paints one of them in a single colour).
 inline void write_cost_heatmaps(const std::shared_ptr<const Scene>& scene, const Camera& camera, int width, int height,
-                                const std::string& out_dir, std::vector<HeatmapImage>& images) {
+                                const std::string& out_dir, std::vector<HeatmapImage>& images,
+                                bool shared_scale = true) {
   const std::vector<Ray> rays = image_rays(camera, width, height);
   std::vector<std::vector<float>> costs;
-  double top = 1.0;
+  double top = 0, bottom = 1e300;
   for (auto& im : images) {
     const auto accel = make_accelerator(im.accel, scene);
     costs.push_back(traversal_cost_per_ray(*accel, rays, 0));
-    double sum = 0, max = 0;
-    for (float c : costs.back()) sum += c, max = std::max<double>(max, c);
+    double sum = 0, max = 0, min = 1e300;
+    for (float c : costs.back()) sum += c, max = std::max<double>(max, c), min = std::min<double>(min, c);
     im.mean_cost = sum / static_cast<double>(rays.size());
     im.max_cost = max;
     top = std::max(top, max);
+    bottom = std::min(bottom, min);
   }
   for (std::size_t i = 0; i < images.size(); ++i)
     write_heatmap_png(out_dir + "/" + images[i].file, costs[i], width, height,
-                      "nodes + leaves + tests per pixel: " + images[i].accel, HeatmapScale::log, top);
+                      "nodes + leaves + tests per pixel: " + images[i].accel, HeatmapScale::log,
+                      shared_scale ? std::max(top, 1.0) : 0.0, shared_scale ? std::min(bottom, top) : -1.0);
 }
 
 }  // namespace raylab::experiments

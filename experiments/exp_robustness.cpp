@@ -20,6 +20,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/exact/contact_classes.h"
 #include "contact_columns.h"
+#include "cost/replicates.h"
 #include "experiment_common.h"
 
 using namespace raylab;
@@ -28,6 +29,16 @@ using namespace raylab::experiments;
 namespace {
 
 std::vector<std::string> all_accel_specs() { return adversarial::accel_specs_under_test(); }
+
+/// Quick mode: the closed CGAL demo meshes up to this many triangles.
+constexpr std::size_t kQuickMaxTriangles = 10000;
+
+/// The closed mesh of the `transformed` cases (far from the origin, tiny, huge).
+std::string kTransformedMesh(bool full) { return full ? "cgal:elephant" : "decimated:of=cgal:elephant,faces=2000"; }
+
+/// Alternated rounds of the non-finite rays' timing: each round traces the valid, the invalid and
+/// the mixed rays in turn, one pass each, timed by the tracing thread's CPU time.
+constexpr int kNonFiniteRounds = 5;
 
 struct Count {
   std::size_t rays = 0, false_hits = 0, missed = 0, wrong_t = 0, ties = 0, allowed = 0, occlusion_mismatches = 0;
@@ -49,13 +60,19 @@ int main(int argc, char** argv) {
   try {
     const auto specs = all_accel_specs();
     std::vector<adversarial::Case> cases = adversarial::synthetic_cases(opt.full() ? 4 : 1);
-    // Every closed CGAL demo mesh (quick mode: those up to 20k triangles, 77 of the 85; the larger
-    // ones cost most of the mode's time in builds, and full mode and the oracle suite run them).
-    const auto closed = adversarial::closed_cgal_meshes(opt.full() ? 0 : 20000);
+    // Every closed CGAL demo mesh (quick mode: those up to 10k triangles, 71 of the 85; the larger
+    // ones cost most of the mode's time: brute force with the exact kernel and the exact oracle
+    // grow with |rays| x |triangles|; full mode and the oracle suite run them).
+    const std::size_t max_triangles = opt.full() ? 0 : kQuickMaxTriangles;
+    const auto closed = adversarial::closed_cgal_meshes(max_triangles);
     progress(fmt::format("robustness: {} closed CGAL demo meshes", closed.size()));
     for (const auto& name : closed)
       cases.push_back(adversarial::shared_edges_case(name, make_scene("cgal:" + name), opt.full() ? 1024 : 256, true));
-    for (auto& c : adversarial::transformed_cases("cgal:elephant", opt.full() ? 1024 : 256)) cases.push_back(std::move(c));
+    // The far, tiny and huge mesh: the elephant, decimated to 2000 triangles in quick mode. At its
+    // 5558 triangles moved to an offset of 1e6, the grids with exact placement (and grid:d=8) take
+    // 10-30 s per build here, against under a second at the origin: most of a quick run's time.
+    for (auto& c : adversarial::transformed_cases(kTransformedMesh(opt.full()), opt.full() ? 1024 : 256))
+      cases.push_back(std::move(c));
 
     CsvWriter csv(opt.out + "/robustness.csv",
                   {"case", "triangles", "ray_class", "accel", "rays", "mismatches", "false_hits", "missed_hits", "wrong_t",
@@ -112,7 +129,7 @@ int main(int argc, char** argv) {
     md += "Every accelerator against the exact oracle on the adversarial cases of the test suite "
           "(`tests/test_adversarial_cases.h`, held to each method's stated accuracy bound by "
           "`tests/test_adversarial.cpp`), on edge-, vertex-aimed, touching and grazing rays of every closed CGAL demo "
-          "mesh" + std::string(opt.full() ? "" : " up to 20,000 triangles (quick mode; full mode runs all)") + ", and on a closed mesh moved far from the origin, shrunk and grown (`transformed:`). Each cell: "
+          "mesh" + std::string(opt.full() ? "" : fmt::format(" up to {} triangles (quick mode; full mode runs all)", kQuickMaxTriangles)) + ", and on a closed mesh (`" + kTransformedMesh(opt.full()) + "`" + std::string(opt.full() ? "" : "; full mode: `cgal:elephant`") + ") moved far from the origin, shrunk and grown (`transformed:`). Each cell: "
           "closest-hit mismatches as false hits / missed hits / wrong first hits. Float methods are judged by the "
           "tolerance of `raylab trace --check` (t within 1e-4 of the scene's scale; a hit on another triangle there is a "
           "tie); methods stated exact (`exact`, `brute:kernel=exact`, every `kernel=certified`) by the exact rule: the "
@@ -204,28 +221,50 @@ int main(int argc, char** argv) {
         if (i % 2) mixed[i] = r;
       }
       CsvWriter nf(opt.out + "/robustness_nonfinite.csv",
-                   {"accel", "rays", "ns_valid", "ns_invalid", "ns_mixed", "ratio_invalid", "ratio_mixed", "invalid_hits"});
+                   {"accel", "rays", "ns_valid", "ns_invalid", "ns_mixed", "ratio_invalid", "ratio_mixed", "invalid_hits",
+                    "ns_valid_lo", "ns_valid_hi", "ratio_invalid_lo", "ratio_invalid_hi", "ratio_mixed_lo",
+                    "ratio_mixed_hi", "rounds"});
+      const int rounds = opt.full() ? 2 * kNonFiniteRounds : kNonFiniteRounds;
       md += fmt::format("\n### Non-finite rays\n\n{} random lines on `{}`; then the same rays with a NaN origin, an "
                         "infinite direction, a NaN tmax or a zero direction (invalid), and half of them invalid "
-                        "(mixed). Single-thread ns per ray; the claim is no slowdown beyond 2.5×.\n\n",
-                        valid.size(), scene->spec);
-      md += "| accelerator | valid ns/ray | invalid ns/ray | mixed ns/ray | invalid / valid | mixed / valid | hits on invalid rays |\n|---|---|---|---|---|---|---|\n";
+                        "(mixed). Single-thread ns per ray (the tracing thread's CPU time), medians over {} alternated "
+                        "rounds that trace the valid, invalid and mixed rays in turn; ratios are taken per round, with "
+                        "95% bootstrap intervals in brackets. The claim is no slowdown beyond 2.5×.\n\n",
+                        valid.size(), scene->spec, rounds);
+      md += "| accelerator | valid ns/ray [95%] | invalid ns/ray | mixed ns/ray | invalid / valid [95%] | mixed / valid [95%] "
+            "| rounds | hits on invalid rays |\n|---|---|---|---|---|---|---|---|\n";
       for (const auto& spec : specs) {
         if (spec.rfind("brute", 0) == 0) continue;  // |rays| x |triangles|: too slow to time here
         const auto accel = make_accelerator(spec, scene);
-        const double a = ns_per_ray(*accel, valid, false), b = ns_per_ray(*accel, invalid, false),
-                     m = ns_per_ray(*accel, mixed, false);
+        const auto trace = [&accel](const std::vector<Ray>* rays) {
+          return [&accel, rays] {
+            return trace_rays(*accel, *rays, TraceOptions{1, false, false}).thread_cpu_seconds /
+                   static_cast<double>(rays->size()) * 1e9;
+          };
+        };
+        const auto ns = alternate_rounds({trace(&valid), trace(&invalid), trace(&mixed)}, rounds);
+        std::vector<double> invalid_ratio, mixed_ratio;
+        for (int r = 0; r < rounds; ++r) {
+          invalid_ratio.push_back(ns[1][r] / ns[0][r]);
+          mixed_ratio.push_back(ns[2][r] / ns[0][r]);
+        }
+        const IntervalEstimate a = bootstrap_median(ns[0]), bi = bootstrap_median(invalid_ratio),
+                               mi = bootstrap_median(mixed_ratio);
+        const double b = median(ns[1]), m = median(ns[2]);
         const std::size_t hits = trace_rays(*accel, invalid, TraceOptions{1, false, false}).hit_count;
-        nf.row(spec, valid.size(), a, b, m, b / a, m / a, hits);
-        md += fmt::format("| `{}` | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {:.2f} | {} |\n", spec, a, b, m, b / a, m / a, hits);
+        nf.row(spec, valid.size(), a.value, b, m, bi.value, mi.value, hits, a.lo, a.hi, bi.lo, bi.hi, mi.lo, mi.hi, rounds);
+        md += fmt::format("| `{}` | {} | {:.1f} | {:.1f} | {} | {} | {} | {} |\n", spec, format_interval(a, 3), b, m,
+                          format_interval(bi), format_interval(mi), rounds, hits);
       }
     }
 
     // Memory per triangle, next to Embree's.
     {
+      // Quick mode: the bunny decimated to 16000 triangles (every structure is built once here; at
+      // its 75k triangles the BSP trees and exact-placement grids take seconds each).
       std::shared_ptr<const Scene> scene;
       try {
-        scene = make_scene("cgal:bunny00");
+        scene = make_scene(opt.full() ? "cgal:bunny00" : "decimated:of=cgal:bunny00,faces=16000");
       } catch (const InputError&) {
         scene = make_scene("sphere:n=70000");
       }

@@ -35,6 +35,7 @@ struct Measured {
   double build_s = 0, ns = 0, embree_ns = 0, nodes_per_ray = 0, leaves_per_ray = 0, tests_per_ray = 0;
   AccelStats stats;
   IntervalEstimate ns_ci, ratio_ci;  ///< medians over the replicate rounds with 95% bootstrap intervals (ratio: Embree's over ours)
+  std::vector<double> ratios;        ///< Embree's time over ours, one per replicate round
   /// Throughput relative to Embree: the median per-round ratio when replicated, else the ratio of the times.
   double ratio() const { return ratio_ci.defined() ? ratio_ci.value : (ns > 0 ? embree_ns / ns : 0); }
 };
@@ -55,29 +56,22 @@ std::vector<Ray> repeat_each(const std::vector<Ray>& rays, int times) {
   return out;
 }
 
-/// Best single-threaded ns per trace of `ours` and of `embree` over the same number of passes (at
-/// least 3), each Embree pass next to one of ours, timed by the tracing thread's CPU time (on a
-/// shared machine it leaves out the time the thread waited for a core).
-std::pair<double, double> alternating_ns_per_ray(const Primitive& ours, const Primitive& embree,
-                                                 const std::vector<Ray>& rays, bool any_hit, double min_seconds) {
-  double best_ours = 1e300, best_embree = 1e300, spent = 0;
-  for (int pass = 0; pass < 1000 && (spent < min_seconds || pass < 3); ++pass) {
-    const double e = trace_rays(embree, rays, TraceOptions{1, false, any_hit}).thread_cpu_seconds;
-    const double o = trace_rays(ours, rays, TraceOptions{1, false, any_hit}).thread_cpu_seconds;
-    best_embree = std::min(best_embree, e);
-    best_ours = std::min(best_ours, o);
-    spent += e + o;
-  }
-  const double n = static_cast<double>(rays.size());
-  return {best_ours / n * 1e9, best_embree / n * 1e9};
-}
-
 /// Times per trace with cold caches (each ray once) and warm ones (each ray kWarmRepeats times in
-/// a row), for a structure and Embree, with their bytes per triangle.
+/// a row), for a structure (contender 0) and Embree (contender 1), each over kTraceRounds
+/// alternated rounds, with their bytes per triangle.
 struct CacheSplit {
   double bytes_per_triangle = 0, embree_bytes_per_triangle = 0;
-  double cold_ns = 0, warm_ns = 0, embree_cold_ns = 0, embree_warm_ns = 0;
+  ReplicateTiming cold, warm;
 };
+
+/// Build seconds of the performance goal's three builds (exact, none, Embree), [build][round].
+struct GoalBuilds {
+  std::size_t triangles = 0;
+  std::vector<std::vector<double>> seconds;
+};
+
+/// Alternated rounds of the goal builds (a ~1.2M-triangle mesh: seconds per build).
+constexpr int kGoalBuildRounds = 5;
 
 class Runner {
  public:
@@ -140,6 +134,7 @@ class Runner {
       const ReplicateTiming t = time_replicates({accel.get(), &embree(scene_spec)}, r, o);
       m.ns_ci = t.ns_per_ray(0);
       m.ratio_ci = t.ratio(1, 0);
+      m.ratios = t.ratios(1, 0);
       m.ns = m.ns_ci.value;
       m.embree_ns = median(t.ns[1]);
     }
@@ -174,28 +169,43 @@ class Runner {
     return seconds;
   }
 
-  /// Best CPU time of `repeats` medium-quality Embree builds of the scene confined to the calling
-  /// thread (a one-thread TBB arena, which Embree's TBB tasking runs in: its process CPU time then
-  /// equals the thread's), timed as the kd-tree's builds; writes a CSV row.
-  double embree_single_thread_build_s(const std::string& scene_spec, int repeats) {
-    progress("spatial: embree single-thread build " + scene_spec);
+  /// The goal builds of `scene_spec` in `rounds` alternated rounds: the kd-tree with exact
+  /// clipping, without clipping, and Embree (medium quality) confined to the calling thread (a
+  /// one-thread TBB arena, which Embree's TBB tasking runs in: its process CPU time then equals the
+  /// thread's), each timed by the building thread's CPU time; writes one CSV row each (medians,
+  /// 95% intervals, rounds).
+  GoalBuilds goal_builds(const std::string& scene_spec, int rounds) {
+    progress(fmt::format("spatial: goal builds {} in {} rounds", scene_spec, rounds));
     const auto s = scene(scene_spec);
+    const std::vector<std::pair<std::string, std::string>> specs = {
+        {"kdtree:clip=exact", "exact"}, {"kdtree:clip=none", "none"}, {"embree:quality=medium", "1 thread"}};
+    std::vector<AccelStats> stats(specs.size());
     tbb::task_arena arena(1);
-    double best = 1e300;
-    AccelStats stats;
-    for (int i = 0; i < repeats; ++i)
-      arena.execute([&] {
-        std::unique_ptr<Aggregate> accel;
-        best = std::min(best, thread_cpu_seconds_of([&] { accel = make_accelerator("embree:quality=medium", s); }));
-        stats = accel->stats();
+    std::vector<std::function<double()>> builds;
+    for (std::size_t i = 0; i < specs.size(); ++i)
+      builds.push_back([&, i] {
+        double t = 0;
+        arena.execute([&] {
+          std::unique_ptr<Aggregate> accel;
+          t = thread_cpu_seconds_of([&] { accel = make_accelerator(specs[i].first, s); });
+          stats[i] = accel->stats();
+        });
+        return t;
       });
-    csv_.row("goal_build", scene_spec, s->mesh.size(), "", 0, "embree:quality=medium", "1 thread", best, stats.nodes,
-             stats.bytes, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1);
-    return best;
+    GoalBuilds b;
+    b.triangles = s->mesh.size();
+    b.seconds = alternate_rounds(builds, rounds);
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      const IntervalEstimate e = bootstrap_median(b.seconds[i]);
+      csv_.row("goal_build", scene_spec, s->mesh.size(), "", 0, specs[i].first, specs[i].second, e.value, stats[i].nodes,
+               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, e.lo, e.hi, rounds);
+    }
+    return b;
   }
 
-  /// Splits the time per ray of `accel_spec` and of Embree into cold- and warm-cache traces; writes
-  /// CSV rows with param "cold" and "warm".
+  /// Splits the time per ray of `accel_spec` and of Embree into cold- and warm-cache traces, each
+  /// in kTraceRounds alternated rounds (the structure and Embree in turn); writes CSV rows with
+  /// param "cold" and "warm" (medians, 95% intervals, rounds).
   CacheSplit cache_split(const std::string& scene_spec, const std::string& ray_spec, const std::string& accel_spec) {
     progress("spatial: cache " + scene_spec + " " + ray_spec + " " + accel_spec);
     const auto s = scene(scene_spec);
@@ -210,13 +220,18 @@ class Runner {
     const double triangles = static_cast<double>(s->mesh.size());
     c.bytes_per_triangle = static_cast<double>(stats.bytes) / triangles;
     c.embree_bytes_per_triangle = static_cast<double>(embree->stats().bytes) / triangles;
-    std::tie(c.cold_ns, c.embree_cold_ns) = alternating_ns_per_ray(*accel, *embree, cold, any, min_seconds);
-    std::tie(c.warm_ns, c.embree_warm_ns) = alternating_ns_per_ray(*accel, *embree, warm, any, min_seconds);
-    for (const auto& [param, n, ns, embree_ns] :
-         {std::tuple{"cold", cold.size(), c.cold_ns, c.embree_cold_ns},
-          std::tuple{"warm", warm.size(), c.warm_ns, c.embree_warm_ns}})
+    ReplicateOptions o;
+    o.rounds = kTraceRounds;
+    o.min_round_seconds = min_seconds / kTraceRounds;
+    o.any_hit = any;
+    c.cold = time_replicates({accel.get(), embree.get()}, cold, o);
+    c.warm = time_replicates({accel.get(), embree.get()}, warm, o);
+    for (const auto& [param, n, t] : {std::tuple{"cold", cold.size(), &c.cold}, std::tuple{"warm", warm.size(), &c.warm}}) {
+      const IntervalEstimate ns = t->ns_per_ray(0), ratio = t->ratio(1, 0);
       csv_.row("cache", scene_spec, s->mesh.size(), ray_spec, n, accel_spec, param, 0.0, stats.nodes, stats.bytes,
-               stats.sah_cost, 0.0, 0.0, 0.0, ns, embree_ns, embree_ns / ns, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0);
+               stats.sah_cost, 0.0, 0.0, 0.0, ns.value, median(t->ns[1]), ratio.value, ns.lo, ns.hi, ratio.lo, ratio.hi,
+               0.0, 0.0, t->rounds());
+    }
     return c;
   }
 
@@ -240,10 +255,12 @@ const char* kRule = "|---|---|---|---|---|---|---|---|---|\n";
 
 /// The goals for the octree and the BSP tree: each ≥ 0.6× the kd-tree's throughput on the
 /// same rays, the BSP build ≤ 5× the kd-tree's, geometric means over CGAL meshes, the stadium,
-/// walls and grass. The kd-tree is the default `kdtree`, built and traced in the same process: every
-/// pass traces the kd-tree, the octree, the BSP tree and Embree one after another, best pass of
-/// each kept; builds are single-threaded CPU time, best of as many builds (in full mode 3 while
-/// a build takes under 2 s). Writes spatial_octree_bsp.csv.
+/// walls and grass. The kd-tree is the default `kdtree`, built and traced in the same process: each
+/// of kTraceRounds alternated rounds builds the kd-tree, the octree, the BSP tree and Embree in turn
+/// (single-threaded CPU time of the building thread; Embree's wall clock, on its own threads), and
+/// each of as many trace rounds traces the four in turn (fastest pass of each per round); every
+/// ratio is taken per round, and its median over the rounds is given with its 95% bootstrap
+/// interval. Writes spatial_octree_bsp.csv.
 std::string octree_bsp_goals(const Options& opt) {
   const std::vector<std::string> scenes =
       opt.full() ? std::vector<std::string>{"cgal:bunny00", "cgal:armadillo", "cgal:ChineseDragon-10kv",
@@ -253,63 +270,71 @@ std::string octree_bsp_goals(const Options& opt) {
                                             "stadium:object=(sphere:n=5000),ratio=1000", "walls:n=400,angle=30",
                                             "grass:blades=10000"};
   const std::string ray_spec = opt.full() ? "primary:65536" : "primary:16384";
-  const int builds = opt.full() ? 3 : 1, passes = opt.full() ? 10 : 4;
+  const double min_round_seconds = opt.full() ? 0.1 : 0.0;
   const std::vector<std::string> accels = {"kdtree", "octree", "bsp", "embree"};
   CsvWriter csv(opt.out + "/spatial_octree_bsp.csv",
                 {"scene", "triangles", "ray_spec", "rays", "accel", "build_s", "build_vs_kdtree", "nodes", "bytes",
-                 "nodes_per_ray", "tests_per_ray", "ns_per_ray", "throughput_vs_kdtree", "throughput_vs_embree"});
+                 "nodes_per_ray", "tests_per_ray", "ns_per_ray", "throughput_vs_kdtree", "throughput_vs_embree",
+                 "build_s_lo", "build_s_hi", "build_vs_kdtree_lo", "build_vs_kdtree_hi", "ns_per_ray_lo",
+                 "ns_per_ray_hi", "throughput_vs_kdtree_lo", "throughput_vs_kdtree_hi", "throughput_vs_embree_lo",
+                 "throughput_vs_embree_hi", "rounds"});
   std::string md = fmt::format(
       "\n#### Octree and BSP tree against the kd-tree\n\n"
       "Goals: octree and BSP tree each ≥ 0.6× the kd-tree's throughput on the same rays, BSP build ≤ 5× the "
-      "kd-tree's. The kd-tree is the default `kdtree`; `{}`, single thread, watertight kernel; every pass traces "
-      "the four structures one after another, best of {} passes each; builds are CPU time of the building thread "
-      "(best of {}, one build when it takes over 2 s). *vs kd* is the kd-tree's time over the structure's "
-      "(throughput ratio); *build / kd* the build time over the kd-tree's.\n\n"
-      "| scene | structure | build (s) | build / kd | nodes | nodes/ray | tests/ray | ns/ray | vs kd | vs Embree |\n"
-      "|---|---|---|---|---|---|---|---|---|---|\n",
-      ray_spec, passes, builds);
-  std::map<std::string, double> log_vs_kd, log_build_vs_kd;
+      "kd-tree's. The kd-tree is the default `kdtree`; `{}`, single thread, watertight kernel. {} alternated rounds "
+      "build the four structures in turn (CPU time of the building thread; Embree's wall clock), and {} alternated "
+      "rounds trace them in turn (fastest pass of each per round); every figure is the median over the rounds with "
+      "its 95% bootstrap interval in brackets, every ratio taken round by round. *vs kd* is the kd-tree's time over "
+      "the structure's (throughput ratio); *build / kd* the build time over the kd-tree's.\n\n"
+      "| scene | structure | build (s) [95%] | build / kd [95%] | nodes | nodes/ray | tests/ray | ns/ray [95%] | "
+      "vs kd [95%] | vs Embree [95%] | rounds |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+      ray_spec, kTraceRounds, kTraceRounds);
+  std::map<std::string, std::vector<std::vector<double>>> vs_kd_rounds, build_vs_kd_rounds;
   for (const std::string& scene_spec : scenes) {
     const auto scene = make_scene(scene_spec);
     const auto rays = make_ray_set(ray_spec, scene);
     const double n = static_cast<double>(rays.size());
+    progress("spatial: octree/bsp goals " + scene_spec);
     std::vector<std::unique_ptr<Aggregate>> built(accels.size());
-    std::vector<double> build_s(accels.size(), 1e300), best(accels.size(), 1e300);
-    for (std::size_t i = 0; i < accels.size(); ++i) {
-      progress("spatial: octree/bsp goals " + scene_spec + " " + accels[i]);
-      // Repeats only while a build is short: a long one is timed well enough once (grass 100k:
-      // minutes per octree build).
-      for (int b = 0; b < (accels[i] == "embree" ? 1 : builds) && (b == 0 || build_s[i] < 2.0); ++b) {
+    std::vector<std::function<double()>> builds;
+    for (std::size_t i = 0; i < accels.size(); ++i)
+      builds.push_back([&, i] {
         built[i].reset();
         const auto build = [&] { built[i] = make_accelerator(accels[i], scene); };
-        build_s[i] = std::min(build_s[i], accels[i] == "embree" ? seconds_of(build) : thread_cpu_seconds_of(build));
-      }
-    }
-    for (int pass = 0; pass < passes; ++pass)
-      for (std::size_t i = 0; i < accels.size(); ++i)
-        best[i] = std::min(best[i], trace_rays(*built[i], rays, TraceOptions{1, false, false}).thread_cpu_seconds);
+        return accels[i] == "embree" ? seconds_of(build) : thread_cpu_seconds_of(build);
+      });
+    const std::vector<std::vector<double>> build_s = alternate_rounds(builds, kTraceRounds);
+    ReplicateOptions o;
+    o.rounds = kTraceRounds;
+    o.min_round_seconds = min_round_seconds;
+    const ReplicateTiming t = time_replicates({built[0].get(), built[1].get(), built[2].get(), built[3].get()}, rays, o);
     for (std::size_t i = 0; i < accels.size(); ++i) {
       const RayCounters c = trace_rays(*built[i], rays, TraceOptions{1, true, false}).counters;
       const double nodes = static_cast<double>(c.nodes) / n, tests = static_cast<double>(c.prim_tests) / n;
-      const double vs_kd = best[0] / best[i], vs_embree = best[3] / best[i], build_vs_kd = build_s[i] / build_s[0];
+      std::vector<double> build_vs_kd;
+      for (int r = 0; r < kTraceRounds; ++r) build_vs_kd.push_back(build_s[i][r] / build_s[0][r]);
+      const IntervalEstimate ns = t.ns_per_ray(i), vs_kd = t.ratio(0, i), vs_embree = t.ratio(3, i),
+                             build = bootstrap_median(build_s[i]), build_kd = bootstrap_median(build_vs_kd);
       const AccelStats stats = built[i]->stats();
-      csv.row(scene_spec, scene->mesh.size(), ray_spec, rays.size(), accels[i], build_s[i], build_vs_kd, stats.nodes,
-              stats.bytes, nodes, tests, best[i] / n * 1e9, vs_kd, vs_embree);
+      csv.row(scene_spec, scene->mesh.size(), ray_spec, rays.size(), accels[i], build.value, build_kd.value,
+              stats.nodes, stats.bytes, nodes, tests, ns.value, vs_kd.value, vs_embree.value, build.lo, build.hi,
+              build_kd.lo, build_kd.hi, ns.lo, ns.hi, vs_kd.lo, vs_kd.hi, vs_embree.lo, vs_embree.hi, t.rounds());
       if (accels[i] == "embree") continue;
-      log_vs_kd[accels[i]] += std::log(vs_kd);
-      log_build_vs_kd[accels[i]] += std::log(build_vs_kd);
-      md += fmt::format("| {} | {} | {:.3f} | {:.2f} | {} | {:.2f} | {:.2f} | {:.0f} | {:.2f} | {:.2f} |\n", scene_spec,
-                        accels[i], build_s[i], build_vs_kd, stats.nodes, nodes, tests, best[i] / n * 1e9, vs_kd,
-                        vs_embree);
+      vs_kd_rounds[accels[i]].push_back(t.ratios(0, i));
+      build_vs_kd_rounds[accels[i]].push_back(build_vs_kd);
+      md += fmt::format("| {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {} | {} | {} | {} |\n", scene_spec, accels[i],
+                        format_interval(build), format_interval(build_kd), stats.nodes, nodes, tests,
+                        format_interval(ns), format_interval(vs_kd), format_interval(vs_embree), t.rounds());
     }
   }
-  const double count = static_cast<double>(scenes.size());
-  const auto mean = [&](double log_sum) { return std::exp(log_sum / count); };
   md += fmt::format(
-      "\nGeometric means over the {} scenes: octree {:.2f}× the kd-tree's throughput (goal ≥ 0.6), BSP tree {:.2f}× "
-      "(goal ≥ 0.6); BSP build {:.2f}× the kd-tree's (goal ≤ 5), octree build {:.2f}×. Data: spatial_octree_bsp.csv.\n",
-      scenes.size(), mean(log_vs_kd["octree"]), mean(log_vs_kd["bsp"]), mean(log_build_vs_kd["bsp"]),
-      mean(log_build_vs_kd["octree"]));
+      "\nGeometric means over the {} scenes (median over the {} rounds of each round's geometric mean, 95% bootstrap "
+      "interval): octree {}× the kd-tree's throughput (goal ≥ 0.6), BSP tree {}× (goal ≥ 0.6); BSP build {}× the "
+      "kd-tree's (goal ≤ 5), octree build {}×. Data: spatial_octree_bsp.csv.\n",
+      scenes.size(), kTraceRounds, format_interval(geometric_mean_by_round(vs_kd_rounds["octree"])),
+      format_interval(geometric_mean_by_round(vs_kd_rounds["bsp"])),
+      format_interval(geometric_mean_by_round(build_vs_kd_rounds["bsp"])),
+      format_interval(geometric_mean_by_round(build_vs_kd_rounds["octree"])));
   return md;
 }
 }  // namespace
@@ -546,62 +571,71 @@ int main(int argc, char** argv) {
     {
       const std::string big = "subdivided:of=cgal:bunny00,levels=2";
       // CPU time of the building thread (the kd-tree builds on it): robust to a shared machine.
-      const Measured exact = run.run("goal_build", big, "primary:16", "kdtree:clip=exact", "exact", false, 1);
-      const Measured none = run.run("goal_build", big, "primary:16", "kdtree:clip=none", "none", false, 1);
-      const double embree_1t = run.embree_single_thread_build_s(big, 2);
+      const GoalBuilds b = run.goal_builds(big, kGoalBuildRounds);
+      const auto per_round = [&](std::size_t num, std::size_t den) {
+        std::vector<double> r;
+        for (int k = 0; k < kGoalBuildRounds; ++k) r.push_back(b.seconds[num][k] / b.seconds[den][k]);
+        return bootstrap_median(r);
+      };
       md += fmt::format(
           "Event-sweep build (`sweep=events`, the default) of `{}` ({} triangles), single thread, CPU time of the "
-          "building thread (goal: ≤ 2 s, about 3× Embree medium's single-thread build): exact clipping "
-          "{:.2f} s, no clipping {:.2f} s; exact / none = {:.2f}. Embree (medium quality, confined to one thread, "
-          "same timing) {:.2f} s: the kd-tree's exact build takes **{:.1f}×** Embree's.\n\n",
-          big, exact.triangles, exact.build_s, none.build_s, exact.build_s / none.build_s, embree_1t,
-          exact.build_s / embree_1t);
+          "building thread, medians [95% bootstrap intervals] over {} alternated rounds (exact, none, Embree in "
+          "turn; goal: ≤ 2 s, about 3× Embree medium's single-thread build): exact clipping {} s, no clipping {} s; "
+          "exact / none = {}. Embree (medium quality, confined to one thread, same timing) {} s: the kd-tree's "
+          "exact build takes **{}×** Embree's.\n\n",
+          big, b.triangles, kGoalBuildRounds, format_interval(bootstrap_median(b.seconds[0])),
+          format_interval(bootstrap_median(b.seconds[1])), format_interval(per_round(0, 1)),
+          format_interval(bootstrap_median(b.seconds[2])), format_interval(per_round(0, 2)));
       const std::vector<std::string> meshes = {"cgal:bunny00", "cgal:armadillo", "cgal:ChineseDragon-10kv"};
       const std::string goal_primary = opt.full() ? "primary:65536" : "primary:16384";
       const std::string goal_diffuse = opt.full() ? "diffuse:65536" : "diffuse:16384";
       md += std::string("| scene, rays ") + kHeader + kRule;
-      double log_sum = 0;
-      int count = 0;
+      std::vector<std::vector<double>> trace_ratios;  // per case, Embree's time over ours per round
       for (const auto& m : meshes)
         for (const auto& r : {goal_primary, goal_diffuse}) {
           const Measured k = run.run("goal_trace", m, r, "kdtree", "sah");
           md += row(m + ", " + r, k);
-          log_sum += std::log(k.ratio());
-          ++count;
+          trace_ratios.push_back(k.ratios);
         }
-      md += fmt::format("\nSAH kd-tree throughput / Embree's, geometric mean over these {} cases (Embree timed apart, not "
-                        "alternated; the goals are judged on the alternating passes below): **{:.2f}**.\n",
-                        count, std::exp(log_sum / count));
+      const int count = static_cast<int>(trace_ratios.size());
+      md += fmt::format("\nSAH kd-tree throughput / Embree's, geometric mean over these {} cases: **{}** (median over "
+                        "the {} rounds of each round's geometric mean, 95% bootstrap interval).\n",
+                        count, format_interval(geometric_mean_by_round(trace_ratios)), kTraceRounds);
 
       md += fmt::format(
           "\n#### Where the gap is: cold against warm caches\n\n"
           "*Cold*: each ray traced once, as above. *Warm*: each ray traced {} times in a row, time per trace; all "
           "but the first trace of a ray find its nodes and leaves in cache, so the difference is the cost of cache "
-          "misses, and the warm ratio roughly bounds what a more compact memory layout alone could reach. Passes "
-          "alternate between the kd-tree and Embree, each timed by the tracing thread's CPU time, best of at least "
-          "3.\n\n",
-          kWarmRepeats);
-      md += "| scene, rays | bytes/triangle | Embree bytes/triangle | ns/ray cold | ns/ray warm | Embree cold | "
-            "Embree warm | vs Embree, cold | vs Embree, warm |\n|---|---|---|---|---|---|---|---|---|\n";
-      double log_warm_sum = 0, log_bytes_sum = 0;
-      std::map<std::string, double> log_cold_sum;  // by ray kind
+          "misses, and the warm ratio roughly bounds what a more compact memory layout alone could reach. Each of "
+          "the {} alternated rounds traces the kd-tree and Embree in turn, each timed by the tracing thread's CPU "
+          "time (fastest pass of the round); ns per trace and the ratio (Embree's time over ours, per round) are "
+          "medians over the rounds, with 95% bootstrap intervals in brackets.\n\n",
+          kWarmRepeats, kTraceRounds);
+      md += "| scene, rays | bytes/triangle | Embree bytes/triangle | ns/ray cold [95%] | ns/ray warm [95%] | Embree "
+            "cold | Embree warm | vs Embree, cold [95%] | vs Embree, warm [95%] | rounds |\n"
+            "|---|---|---|---|---|---|---|---|---|---|\n";
+      double log_bytes_sum = 0;
+      std::vector<std::vector<double>> warm_ratios;
+      std::map<std::string, std::vector<std::vector<double>>> cold_ratios;  // by ray kind
       for (const auto& m : meshes)
         for (const auto& r : {goal_primary, goal_diffuse}) {
           const CacheSplit c = run.cache_split(m, r, "kdtree");
-          md += fmt::format("| {}, {} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.2f} | {:.2f} |\n", m, r,
-                            c.bytes_per_triangle, c.embree_bytes_per_triangle, c.cold_ns, c.warm_ns, c.embree_cold_ns,
-                            c.embree_warm_ns, c.embree_cold_ns / c.cold_ns, c.embree_warm_ns / c.warm_ns);
-          log_warm_sum += std::log(c.embree_warm_ns / c.warm_ns);
-          log_cold_sum[r] += std::log(c.embree_cold_ns / c.cold_ns);
+          md += fmt::format("| {}, {} | {:.0f} | {:.0f} | {} | {} | {:.0f} | {:.0f} | {} | {} | {} |\n", m, r,
+                            c.bytes_per_triangle, c.embree_bytes_per_triangle, format_interval(c.cold.ns_per_ray(0)),
+                            format_interval(c.warm.ns_per_ray(0)), median(c.cold.ns[1]), median(c.warm.ns[1]),
+                            format_interval(c.cold.ratio(1, 0)), format_interval(c.warm.ratio(1, 0)), c.cold.rounds());
+          warm_ratios.push_back(c.warm.ratios(1, 0));
+          cold_ratios[r].push_back(c.cold.ratios(1, 0));
           log_bytes_sum += std::log(c.bytes_per_triangle / c.embree_bytes_per_triangle);
         }
-      const double per_kind = static_cast<double>(meshes.size());
       md += fmt::format(
-          "\nGeometric means over the {} meshes, cold caches (alternating passes): **{:.2f}** of Embree's throughput on "
-          "primary rays (goal ≥ 0.8), **{:.2f}** on diffuse rays (goal ≥ 0.6). Warm caches, all {} cases: **{:.2f}**. "
-          "Memory: **{:.2f}×** Embree's bytes per triangle (geometric mean; goal ≤ 2).\n",
-          meshes.size(), std::exp(log_cold_sum[goal_primary] / per_kind), std::exp(log_cold_sum[goal_diffuse] / per_kind),
-          count, std::exp(log_warm_sum / count), std::exp(log_bytes_sum / count));
+          "\nGeometric means over the {} meshes, cold caches (median over the {} rounds of each round's geometric "
+          "mean, 95% bootstrap interval): **{}** of Embree's throughput on primary rays (goal ≥ 0.8), **{}** on "
+          "diffuse rays (goal ≥ 0.6). Warm caches, all {} cases: **{}**. Memory: **{:.2f}×** Embree's bytes per "
+          "triangle (geometric mean, a count: no interval; goal ≤ 2).\n",
+          meshes.size(), kTraceRounds, format_interval(geometric_mean_by_round(cold_ratios[goal_primary])),
+          format_interval(geometric_mean_by_round(cold_ratios[goal_diffuse])), count,
+          format_interval(geometric_mean_by_round(warm_ratios)), std::exp(log_bytes_sum / count));
     }
 
     md += octree_bsp_goals(opt);

@@ -74,6 +74,23 @@ TEST(Replicates, BootstrapFitCoversTheTrueSlopeAndShrinksWithLessNoise) {
   EXPECT_THROW(bootstrap_fit({{1.0}, {}}, slope, 10), std::invalid_argument);
 }
 
+TEST(Replicates, GeometricMeanByRoundTakesEachRoundAcrossCases) {
+  // Two cases, five rounds: round r's geometric mean is sqrt(a[r]·b[r]).
+  const std::vector<double> a = {1, 4, 2, 2, 8}, b = {4, 1, 2, 8, 2};
+  const IntervalEstimate g = geometric_mean_by_round({a, b});
+  EXPECT_EQ(g.replicates, 5);
+  EXPECT_NEAR(g.value, 2.0, 1e-12);  // rounds: 2, 2, 2, 4, 4
+  EXPECT_NEAR(g.lo, 2.0, 1e-12);
+  EXPECT_LE(g.hi, 4.0 + 1e-12);
+  // One case: its own median and interval.
+  const IntervalEstimate one = geometric_mean_by_round({a});
+  EXPECT_DOUBLE_EQ(one.value, bootstrap_median(a).value);
+  EXPECT_DOUBLE_EQ(one.lo, bootstrap_median(a).lo);
+  EXPECT_THROW(geometric_mean_by_round({}), std::invalid_argument);
+  EXPECT_THROW(geometric_mean_by_round({a, {1, 2}}), std::invalid_argument);
+  EXPECT_THROW(geometric_mean_by_round({{1, 0, 2}}), std::invalid_argument);
+}
+
 TEST(Replicates, TimeReplicatesGivesOneTimePerContenderAndRound) {
   const auto scene = make_scene("sphere:n=200");
   const auto bvh = make_accelerator("bvh", scene);

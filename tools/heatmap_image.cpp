@@ -90,17 +90,21 @@ void write_shaded_png(const std::string& path, const std::vector<float>& values,
   img.save(path);
 }
 
+double heatmap_position(double c, double lo, double hi, HeatmapScale scale) {
+  if (!(hi > lo)) return 0.5;
+  const auto f = [&](double v) { return scale == HeatmapScale::log ? std::log1p(std::max(0.0, v)) : v; };
+  return std::clamp((f(c) - f(lo)) / (f(hi) - f(lo)), 0.0, 1.0);
+}
+
 void write_heatmap_png(const std::string& path, const std::vector<float>& costs, int width, int height,
-                       const std::string& title, HeatmapScale scale, double scale_max) {
+                       const std::string& title, HeatmapScale scale, double max_cost, double min_cost) {
   const int bar = 90, footer = 28;
   Image img(width + bar, height + footer, 255);
-  const double max_cost =
-      scale_max > 0 ? scale_max : std::max(1.0, static_cast<double>(*std::max_element(costs.begin(), costs.end())));
+  const auto [least, largest] = std::minmax_element(costs.begin(), costs.end());
+  const double hi = max_cost > 0 ? max_cost : costs.empty() ? 1.0 : static_cast<double>(*largest);
+  const double lo = min_cost >= 0 ? min_cost : costs.empty() ? 0.0 : std::min(hi, static_cast<double>(*least));
   const bool log_scale = scale == HeatmapScale::log;
-  // Position of a cost on the ramp, in [0, 1].
-  auto position = [&](double c) {
-    return std::min(1.0, log_scale ? std::log1p(std::max(0.0, c)) / std::log1p(max_cost) : c / max_cost);
-  };
+  auto position = [&](double c) { return heatmap_position(c, lo, hi, scale); };
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) img.set(x, y, ramp(position(costs[static_cast<std::size_t>(y) * width + x])));
   const int bx = width + 12, bw = 18;
@@ -111,13 +115,14 @@ void write_heatmap_png(const std::string& path, const std::vector<float>& costs,
     const int y = static_cast<int>(std::lround((1.0 - position(c)) * (height - 1)));
     img.text(bx + bw + 4, std::clamp(y - 4, 2, height - 10), number(c), 1, black);
   };
-  label(0);
-  label(max_cost);
-  if (log_scale) {
-    for (double c = 10; c < max_cost / 2; c *= 10)
-      if (position(c) > 0.08 && position(c) < 0.92) label(c);
-  } else {
-    label(max_cost / 2);
+  label(hi);
+  if (hi > lo) {
+    label(lo);
+    int between = 0;
+    if (log_scale)
+      for (double c = std::pow(10.0, std::floor(std::log10(std::max(1.0, lo))) + 1); c < hi; c *= 10)
+        if (position(c) > 0.08 && position(c) < 0.92) label(c), ++between;
+    if (between == 0) label(log_scale ? std::expm1(0.5 * (std::log1p(lo) + std::log1p(hi))) : 0.5 * (lo + hi));
   }
   img.text(4, height + 8, title + (log_scale ? " (log colour scale)" : ""), 1, black);
   img.save(path);

@@ -100,6 +100,23 @@ BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
   return out;
 }
 
+IntervalEstimate geometric_mean_by_round(const std::vector<std::vector<double>>& values, int resamples,
+                                         std::uint64_t seed) {
+  if (values.empty() || values.front().empty())
+    throw std::invalid_argument("geometric_mean_by_round: no cases or no rounds");
+  const std::size_t rounds = values.front().size();
+  std::vector<double> by_round(rounds, 0.0);
+  for (const auto& c : values) {
+    if (c.size() != rounds) throw std::invalid_argument("geometric_mean_by_round: cases with unequal round counts");
+    for (std::size_t r = 0; r < rounds; ++r) {
+      if (!(c[r] > 0)) throw std::invalid_argument("geometric_mean_by_round: a value that is not positive");
+      by_round[r] += std::log(c[r]);
+    }
+  }
+  for (double& g : by_round) g = std::exp(g / static_cast<double>(values.size()));
+  return bootstrap_median(by_round, resamples, seed);
+}
+
 std::vector<double> ReplicateTiming::ratios(std::size_t numerator, std::size_t denominator) const {
   const auto& a = ns.at(numerator);
   const auto& b = ns.at(denominator);

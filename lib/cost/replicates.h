@@ -101,6 +101,15 @@ ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders,
 /// the contenders called in turn within each round (builds, for example, timed by the caller).
 std::vector<std::vector<double>> alternate_rounds(const std::vector<std::function<double()>>& measure, int rounds);
 
+/// The geometric mean of a ratio over several cases, replicated round by round: `values[c][r]` is
+/// case c's figure in round r (every case measured in the same number of alternated rounds), and
+/// round r's replicate is exp(mean over c of log values[c][r]), the geometric mean of the cases
+/// as round r measured them. Returns the median over the rounds with its percentile-bootstrap
+/// 95% interval (bootstrap_median; `replicates` is the round count). Throws
+/// std::invalid_argument for no cases, no rounds, unequal round counts or a value ≤ 0.
+IntervalEstimate geometric_mean_by_round(const std::vector<std::vector<double>>& values,
+                                         int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
+
 /// "1.23 [1.10, 1.31]" with `digits` significant digits.
 std::string format_interval(const IntervalEstimate& i, int digits = 3);
 
