@@ -84,9 +84,10 @@ TEST(CertifiedInstances, TheLectureSceneOfThreeBillionTrianglesIsTracedCertified
     ASSERT_LT(h.prim, base.mesh.size());
     instances_hit.insert(h.instance);
     same += h.instance == reference.hits[i].instance && h.prim == reference.hits[i].prim;
-    // The hit lies on the plane of the triangle it names, as the flat copy places it. Its t is
-    // the midpoint of the kernel's enclosure of the exact t, which the float filter may leave a
-    // few 10^-5 wide when the triangle is small against its distance from the ray's origin.
+    // The hit lies on the plane of the triangle it names, as the flat copy places it. Its t is the
+    // kernel's float estimate inside its enclosure of the exact t (certified_kernel.h): the first
+    // hit is exact, its t as close as a float kernel's, a few 10^-6 relative here, where each
+    // triangle is small against its distance from the ray's origin.
     const AffineTransform& xf = scene->instances[h.instance].transform;
     const Vec3d p0(xf.apply_point(base.mesh.vertex(h.prim, 0))), p1(xf.apply_point(base.mesh.vertex(h.prim, 1))),
         p2(xf.apply_point(base.mesh.vertex(h.prim, 2)));
