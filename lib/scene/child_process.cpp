@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 
 #include "geometry/input_error.h"
@@ -156,20 +157,31 @@ void run_in_child_process(const std::string& what, const std::function<void(Pipe
     ::close(fds[0]);
     die_by_default_on_fatal_signals();
     PipeSink sink(fds[1]);
-    int status = 0;
+    std::optional<std::string> error;
     try {
       compute_and_write(sink);
     } catch (const InputError& e) {
-      if (sink.begun()) status = 3; else sink.write_error(e.what());
+      error = e.what();
     } catch (const std::exception& e) {
-      if (sink.begun()) status = 3; else sink.write_error(what + " failed: " + e.what());
+      error = what + " failed: " + e.what();
     } catch (...) {
-      if (sink.begun()) status = 3; else sink.write_error(what + " failed with an unknown exception");
+      error = what + " failed with an unknown exception";
+    }
+    int status = 0;
+    if (error) {
+      if (sink.begun()) status = 3;
+      else sink.write_error(*error);
     }
     if (!sink.flush() && status == 0) status = 4;
     ::_exit(status);
   }
   ::close(fds[1]);
+  // The parent gives up on the child: its end of the pipe closed, the child killed and reaped.
+  auto stop_child = [&] {
+    ::close(fds[0]);
+    ::kill(pid, SIGKILL);
+    reap(pid);
+  };
   PipeSource source(fds[0], deadline);
   std::string child_error;
   bool ended = false;
@@ -184,21 +196,15 @@ void run_in_child_process(const std::string& what, const std::function<void(Pipe
   } catch (const PipeSource::OutputEnded&) {
     ended = true;
   } catch (const std::length_error& e) {
-    ::close(fds[0]);
-    ::kill(pid, SIGKILL);
-    reap(pid);
+    stop_child();
     throw InputError(what + " " + e.what());
   } catch (const PipeSource::TimedOut&) {
-    ::close(fds[0]);
-    ::kill(pid, SIGKILL);
-    reap(pid);
+    stop_child();
     char seconds[32];
     std::snprintf(seconds, sizeof seconds, "%.3g", static_cast<double>(time_limit.count()) * 1e-3);
     throw InputError(what + " did not finish within " + seconds + " s; raylab stopped it");
   } catch (...) {
-    ::close(fds[0]);
-    ::kill(pid, SIGKILL);
-    reap(pid);
+    stop_child();
     throw;
   }
   ::close(fds[0]);

@@ -9,7 +9,6 @@
 #include "accel/common/accel_factory.h"
 #include "accel/exact/exact_oracle.h"
 #include "geometry/certified_kernel.h"
-#include "geometry/input_error.h"
 #include "scene/ray_counters.h"
 
 namespace raylab {
@@ -73,10 +72,7 @@ bool meets(const Ray& ray, const WorldBox& box, double reach, double& entry) {
 CertifiedInstances::CertifiedInstances(std::shared_ptr<const Scene> scene) : scene_(std::move(scene)) {
   const Scene& s = *scene_;
   require_valid_instances(s);
-  for (std::size_t i = 0; i < s.instances.size(); ++i)
-    if (!s.base_of(i).spheres.empty() && !is_similarity(s.instances[i].transform))
-      throw InputError("scene '" + s.spec + "': instance " + std::to_string(i) +
-                       " scales spheres non-uniformly, which the certified answer (the flat copy's) cannot hold");
+  require_spheres_stay_spheres(s);
   BvhConfig config;
   config.builder = BvhBuilder::binned;
   config.max_leaf_size = 4;

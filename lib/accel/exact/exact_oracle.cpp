@@ -219,6 +219,10 @@ class ExactOracle final : public AggregateBase<ExactOracle> {
 
 }  // namespace
 
+namespace {
+
+/// Whether the linear part of `xf` is a rotation times a uniform scale (up to rounding), which
+/// maps a sphere onto a sphere.
 bool is_similarity(const AffineTransform& xf) {
   const Vec3d c[3] = {xf.apply_vector(Vec3d(1, 0, 0)), xf.apply_vector(Vec3d(0, 1, 0)), xf.apply_vector(Vec3d(0, 0, 1))};
   const double n = dot(c[0], c[0]);
@@ -226,8 +230,6 @@ bool is_similarity(const AffineTransform& xf) {
   return std::abs(dot(c[1], c[1]) - n) <= tol && std::abs(dot(c[2], c[2]) - n) <= tol && std::abs(dot(c[0], c[1])) <= tol &&
          std::abs(dot(c[0], c[2])) <= tol && std::abs(dot(c[1], c[2])) <= tol;
 }
-
-namespace {
 
 /// Appends `part`'s geometry under `xf` to `flat` (vertices transformed in double, rounded to float).
 void append_transformed(Scene& flat, std::vector<Sphere>& spheres, const Scene& part, const AffineTransform& xf) {
@@ -240,6 +242,13 @@ void append_transformed(Scene& flat, std::vector<Sphere>& spheres, const Scene& 
 
 }  // namespace
 
+void require_spheres_stay_spheres(const Scene& scene) {
+  for (std::size_t i = 0; i < scene.instances.size(); ++i)
+    if (!scene.base_of(i).spheres.empty() && !is_similarity(scene.instances[i].transform))
+      throw InputError("scene '" + scene.spec + "': instance " + std::to_string(i) +
+                       " scales spheres non-uniformly, which the flat copy cannot hold");
+}
+
 std::shared_ptr<const Scene> flatten_instances(const Scene& scene) {
   if (!scene.instanced()) throw std::logic_error("flatten_instances: scene is not instanced");
   require_valid_instances(scene);
@@ -247,10 +256,7 @@ std::shared_ptr<const Scene> flatten_instances(const Scene& scene) {
     throw InputError("scene '" + scene.spec + "': the exact oracle flattens instances and accepts at most " +
                      std::to_string(static_cast<long long>(kExactOracleMaxPrimitives)) + " primitives, this has " +
                      std::to_string(static_cast<long long>(scene.total_primitive_count())));
-  for (std::size_t i = 0; i < scene.instances.size(); ++i)
-    if (!scene.base_of(i).spheres.empty() && !is_similarity(scene.instances[i].transform))
-      throw InputError("scene '" + scene.spec + "': instance " + std::to_string(i) +
-                       " scales spheres non-uniformly, which the oracle's flat copy cannot hold");
+  require_spheres_stay_spheres(scene);
   auto flat = std::make_shared<Scene>();
   flat->spec = scene.spec + " (flattened)";
   std::vector<Sphere> spheres;

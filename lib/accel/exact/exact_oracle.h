@@ -21,9 +21,10 @@ inline constexpr double kExactOracleMaxPrimitives = 1u << 26;
 /// kExactOracleMaxPrimitives primitives.
 std::unique_ptr<Aggregate> make_exact_oracle(std::shared_ptr<const Scene> scene);
 
-/// Whether the linear part of `xf` is a rotation times a uniform scale (up to rounding), which
-/// maps a sphere onto a sphere (flatten_instances refuses spheres under any other transform).
-bool is_similarity(const AffineTransform& xf);
+/// Throws InputError naming the scene and the instance when an instance places spheres under a
+/// transform that is not a rotation times a uniform scale: the flat copy (flatten_instances, and
+/// the geometry the certified answers are stated for) holds spheres, not ellipsoids.
+void require_spheres_stay_spheres(const Scene& scene);
 
 /// The flat copy of an instanced scene the oracle uses: the flat geometry's triangles, then those
 /// of instance 0, 1, ... (vertices transformed in double, rounded to float), then the spheres in
