@@ -13,6 +13,9 @@
 // robustness_nonfinite.csv, robustness_memory.csv and robustness.md.
 #include <fmt/format.h>
 
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 #include <map>
 
 #include "../tests/test_adversarial_cases.h"
@@ -84,15 +87,19 @@ int main(int argc, char** argv) {
     std::vector<std::string> groups;
     std::map<std::string, std::string> group_detail;
     std::vector<std::string> violations;
-    for (const auto& c : cases) {
-      const std::string group = c.name.rfind("shared_edges/", 0) == 0 && c.name != "shared_edges/fan256"
-                                    ? "shared_edges/cgal (" + std::to_string(closed.size()) + " meshes)"
-                                    : c.name;
-      if (!group_detail.count(group)) {
-        groups.push_back(group);
-        group_detail[group] = c.detail;
-      }
-      progress(fmt::format("robustness: {} ({} triangles, {} rays)", c.name, c.scene->mesh.size(), c.rays.size()));
+    // Each case against every spec, cases in parallel (nothing here is timed); the rows are
+    // written afterwards in case order, so the output does not depend on the thread count.
+    struct SpecOutcome {
+      Count count;
+      bool ok = false;
+      std::string why;
+    };
+    std::vector<std::vector<SpecOutcome>> outcomes(cases.size());
+    std::atomic<std::size_t> started{0};
+    tbb::parallel_for(std::size_t{0}, cases.size(), [&](std::size_t ci) {
+      const auto& c = cases[ci];
+      progress(fmt::format("robustness: [{}/{}] {} ({} triangles, {} rays)", ++started, cases.size(), c.name,
+                           c.scene->mesh.size(), c.rays.size()));
       const auto oracle = make_accelerator("exact", c.scene);
       const TraceResult ref = trace_rays(*oracle, c.rays, TraceOptions{0, false, false});
       const TraceResult ref_occ = trace_rays(*oracle, c.rays, TraceOptions{0, false, true});
@@ -109,18 +116,35 @@ int main(int argc, char** argv) {
         std::size_t allowed = 0;
         for (int b = 0; b < kRayBuckets; ++b)
           allowed += allowed_mismatches(bound, static_cast<RayBucket>(b), c.feature_rays(), h.bucket_rays[b]);
-        Count k{h.rays, h.false_hits, h.missed_hits, h.wrong_t, h.ties, allowed, o.mismatches, h.bucket_rays,
-                h.bucket_mismatches, ContactColumns::of(h)};
-        std::string why;
-        const bool ok = within_bound(bound, h, c.feature_rays(), &why) && within_bound(bound, o, c.feature_rays(), &why);
-        if (!ok) violations.push_back(fmt::format("`{}` on `{}`: {}", spec, c.name, why));
+        SpecOutcome out;
+        out.count = Count{h.rays, h.false_hits, h.missed_hits, h.wrong_t, h.ties, allowed, o.mismatches, h.bucket_rays,
+                          h.bucket_mismatches, ContactColumns::of(h)};
+        out.ok = within_bound(bound, h, c.feature_rays(), &out.why) && within_bound(bound, o, c.feature_rays(), &out.why);
+        outcomes[ci].push_back(std::move(out));
+      }
+    });
+    for (std::size_t ci = 0; ci < cases.size(); ++ci) {
+      const auto& c = cases[ci];
+      const std::string group = c.name.rfind("shared_edges/", 0) == 0 && c.name != "shared_edges/fan256"
+                                    ? "shared_edges/cgal (" + std::to_string(closed.size()) + " meshes)"
+                                    : c.name;
+      if (!group_detail.count(group)) {
+        groups.push_back(group);
+        group_detail[group] = c.detail;
+      }
+      for (std::size_t si = 0; si < specs.size(); ++si) {
+        const std::string& spec = specs[si];
+        const SpecOutcome& out = outcomes[ci][si];
+        const Count& k = out.count;
+        if (!out.ok) violations.push_back(fmt::format("`{}` on `{}`: {}", spec, c.name, out.why));
         // The class columns are the per-class table's (contact_columns.h): touching and on-surface rays
         // by their contact class (the accuracy buckets file both under ill-conditioned).
         const ContactColumns& cc = k.contact;
         csv.row(c.name, c.scene->mesh.size(), std::string(adversarial::ray_class_name(c.ray_class)), spec, k.rays,
-                k.mismatches(), k.false_hits, k.missed, k.wrong_t, k.ties, k.occlusion_mismatches, k.allowed, ok ? 1 : 0,
-                std::string(bound.exact ? "exact" : "tolerance"), cc.rays[0], cc.mismatches[0], cc.rays[1],
-                cc.mismatches[1], cc.rays[2], cc.mismatches[2], cc.rays[3], cc.mismatches[3]);
+                k.mismatches(), k.false_hits, k.missed, k.wrong_t, k.ties, k.occlusion_mismatches, k.allowed,
+                out.ok ? 1 : 0, std::string(accuracy_bound(spec).exact ? "exact" : "tolerance"), cc.rays[0],
+                cc.mismatches[0], cc.rays[1], cc.mismatches[1], cc.rays[2], cc.mismatches[2], cc.rays[3],
+                cc.mismatches[3]);
         table[group][spec].add(k);
       }
     }

@@ -368,6 +368,6 @@ inline std::string provenance() {
   return flags + ", FTZ/DAZ on, " + std::to_string(resolve_thread_count(0)) + " hardware threads";
 }
 
-inline void progress(const std::string& line) { std::cerr << line << std::endl; }
+inline void progress(const std::string& line) { std::cerr << (line + "\n") << std::flush; }  // one write: lines from threads do not mix
 
 }  // namespace raylab::experiments

@@ -6,6 +6,9 @@
 #include <map>
 #include <optional>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_invoke.h>
+
 #include "accel/bsp/bsp.h"
 #include "accel/common/ray_sets.h"
 #include "accel/bsp/bsp_cell.h"
@@ -97,74 +100,121 @@ TriangleGeometry triangle_geometry(const Scene& scene) {
 
 /// The end-point overlap of a binary BVH (tree_features.h). Top-down: the foreign primitives
 /// overlapping a child's box are among the parent's foreign primitives and the sibling's, less
-/// the child's own (SBVH references a primitive on both sides). O(N·depth) box tests.
-double bvh2_epo(const Bvh2& tree, const Scene& scene) {
-  const TriangleGeometry g = triangle_geometry(scene);
-  if (g.total_area <= 0 || tree.nodes.empty()) return 0.0;
-  const std::size_t triangles = scene.mesh.size();
-  std::vector<std::uint32_t> mark(scene.primitive_count(), 0);
-  std::uint32_t stamp = 0;
+/// the child's own (SBVH references a primitive on both sides). O(N·depth) box tests, and one
+/// clip per foreign triangle whose box is not inside the node's. The subtrees of the top
+/// kParallelDepth levels run in parallel; each node's term is summed in node order, so the
+/// result does not depend on the thread count.
+class EndPointOverlap {
+ public:
+  EndPointOverlap(const Bvh2& tree, const Scene& scene)
+      : tree_(tree), scene_(scene), g_(triangle_geometry(scene)), term_(tree.nodes.size(), 0.0),
+        marks_([&scene] { return Marks{std::vector<std::uint32_t>(scene.primitive_count(), 0), 0}; }) {}
 
-  auto subtree_prims = [&](std::uint32_t node, auto&& f) {
+  double operator()() {
+    if (g_.total_area <= 0 || tree_.nodes.empty()) return 0.0;
+    walk(0, {}, 0);
+    double epo = 0;
+    for (double t : term_) epo += t;
+    return epo / g_.total_area;
+  }
+
+ private:
+  static constexpr int kParallelDepth = 8;
+  /// mark[p] == stamp for the primitives seen in the current pass; one per thread.
+  struct Marks {
+    std::vector<std::uint32_t> mark;
+    std::uint32_t stamp;
+  };
+  struct Item {
+    std::uint32_t node;
+    std::vector<std::uint32_t> foreign;  ///< triangles outside the subtree overlapping the box
+  };
+
+  template <class F>
+  void for_subtree_prims(std::uint32_t node, F&& f) const {
     std::vector<std::uint32_t> stack = {node};
     while (!stack.empty()) {
-      const Bvh2Node& n = tree.nodes[stack.back()];
+      const Bvh2Node& n = tree_.nodes[stack.back()];
       stack.pop_back();
       if (n.is_leaf()) {
-        for (std::uint32_t i = n.first; i < n.first + n.count; ++i) f(tree.prims[i]);
+        for (std::uint32_t i = n.first; i < n.first + n.count; ++i) f(tree_.prims[i]);
       } else {
         stack.push_back(n.first);
         stack.push_back(n.first + 1);
       }
     }
-  };
-  auto foreign_area = [&](const std::vector<std::uint32_t>& foreign, const Bounds3f& box) {
+  }
+
+  /// The area of the foreign triangles inside `box` (a triangle whose box lies inside needs no clip).
+  double foreign_area(const std::vector<std::uint32_t>& foreign, const Bounds3f& box) const {
     double a = 0;
     for (std::uint32_t t : foreign) {
-      const auto& tri = scene.mesh.triangles[t];
-      a += clipped_triangle_area(scene.mesh.vertices[tri[0]], scene.mesh.vertices[tri[1]], scene.mesh.vertices[tri[2]], box);
+      if (box.contains(g_.box[t].lo) && box.contains(g_.box[t].hi)) {
+        a += g_.area[t];
+        continue;
+      }
+      const auto& tri = scene_.mesh.triangles[t];
+      const auto& v = scene_.mesh.vertices;
+      a += clipped_triangle_area(v[tri[0]], v[tri[1]], v[tri[2]], box);
     }
     return a;
-  };
+  }
 
-  double epo = 0;
-  struct Item {
-    std::uint32_t node;
-    std::vector<std::uint32_t> foreign;  ///< triangles outside the subtree overlapping the box
-  };
-  std::vector<Item> todo;
-  todo.push_back({0, {}});
-  while (!todo.empty()) {
-    Item it = std::move(todo.back());
-    todo.pop_back();
-    const Bvh2Node& n = tree.nodes[it.node];
-    const double weight = n.is_leaf() ? static_cast<double>(n.count) : 1.0;
-    epo += weight * foreign_area(it.foreign, n.box);
-    if (n.is_leaf()) continue;
+  /// Sets the node's term; returns its children's items (none for a leaf).
+  std::vector<Item> visit(const Item& it) {
+    const Bvh2Node& n = tree_.nodes[it.node];
+    term_[it.node] = (n.is_leaf() ? static_cast<double>(n.count) : 1.0) * foreign_area(it.foreign, n.box);
+    std::vector<Item> children;
+    if (n.is_leaf()) return children;
+    Marks& m = marks_.local();
+    const std::size_t triangles = scene_.mesh.size();
     for (int side = 0; side < 2; ++side) {
       const std::uint32_t child = n.first + side, sibling = n.first + 1 - side;
-      const Bounds3f& box = tree.nodes[child].box;
-      ++stamp;
-      subtree_prims(child, [&](std::uint32_t p) { mark[p] = stamp; });
+      const Bounds3f& box = tree_.nodes[child].box;
+      const std::uint32_t stamp = ++m.stamp;
+      for_subtree_prims(child, [&](std::uint32_t p) { m.mark[p] = stamp; });
       std::vector<std::uint32_t> foreign;
       auto consider = [&](std::uint32_t p) {
-        if (p < triangles && mark[p] != stamp && g.box[p].overlaps(box)) {
-          mark[p] = stamp;  // once, even if referenced twice
+        if (p < triangles && m.mark[p] != stamp && g_.box[p].overlaps(box)) {
+          m.mark[p] = stamp;  // once, even if referenced twice
           foreign.push_back(p);
         }
       };
       for (std::uint32_t p : it.foreign) consider(p);
-      subtree_prims(sibling, consider);
-      todo.push_back({child, std::move(foreign)});
+      for_subtree_prims(sibling, consider);
+      children.push_back({child, std::move(foreign)});
+    }
+    return children;
+  }
+
+  void walk(std::uint32_t node, std::vector<std::uint32_t> foreign, int depth) {
+    std::vector<Item> todo;
+    todo.push_back({node, std::move(foreign)});
+    if (depth < kParallelDepth) {
+      std::vector<Item> children = visit(todo.back());
+      if (children.size() == 2)
+        tbb::parallel_invoke([&] { walk(children[0].node, std::move(children[0].foreign), depth + 1); },
+                             [&] { walk(children[1].node, std::move(children[1].foreign), depth + 1); });
+      return;
+    }
+    while (!todo.empty()) {
+      const Item it = std::move(todo.back());
+      todo.pop_back();
+      for (Item& c : visit(it)) todo.push_back(std::move(c));
     }
   }
-  return epo / g.total_area;
-}
+
+  const Bvh2& tree_;
+  const Scene& scene_;
+  const TriangleGeometry g_;
+  std::vector<double> term_;
+  tbb::enumerable_thread_specific<Marks> marks_;
+};
 
 TreeFeatures bvh_features(const Bvh& bvh, const Scene& scene) {
   if (bvh.tree().nodes.empty()) throw InputError("tree features: the BVH is empty");
   TreeFeatures f = cell_features(bvh);
-  f.epo = bvh2_epo(bvh.tree(), scene);
+  f.epo = EndPointOverlap(bvh.tree(), scene)();
   return f;
 }
 
