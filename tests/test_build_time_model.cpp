@@ -139,6 +139,10 @@ TEST(BuildTimeModel, SpecsOfTheSameStructureFindTheSameEntry) {
   EXPECT_EQ(canonical_accel_spec("bvh"), canonical_accel_spec("bvh:width=8"));
   EXPECT_EQ(canonical_accel_spec("grid"), canonical_accel_spec("grid:d=3"));
   EXPECT_NE(canonical_accel_spec("grid"), canonical_accel_spec("grid:d=1"));
+  // Trees built from fitted constants are one structure whichever model supplied them.
+  EXPECT_EQ(canonical_accel_spec("bvh:cost=default"), canonical_accel_spec("bvh:width=8,cost=(/tmp/m.json)"));
+  EXPECT_NE(canonical_accel_spec("bvh:cost=default"), canonical_accel_spec("bvh"));
+  EXPECT_NE(canonical_accel_spec("kdtree:cost=default"), canonical_accel_spec("bvh:cost=default"));
   const std::map<std::string, int> models = {{"bvh", 1}, {"grid:d=1", 2}};
   ASSERT_NE(find_spec_model(models, "bvh:width=8"), nullptr);
   EXPECT_EQ(*find_spec_model(models, "bvh:width=8"), 1);

@@ -3,7 +3,10 @@
 /// the plan spells it (`bvh`, `grid:d=3`), a user or `auto` may spell the same structure
 /// otherwise (`bvh:width=8`, `grid`). Two specs name the same structure when their canonical
 /// forms agree: the accelerator's name, then every parameter it takes, defaults filled in, sorted
-/// by key (`bvh:builder=binned,...,width=8`).
+/// by key (`bvh:builder=binned,...,width=8`). Every `cost=MODEL` reads as `cost=fitted`: a tree
+/// built from a model's fitted constants stands for one structure whichever model supplied them,
+/// so the data set's `bvh:cost=default` rows predict `auto`'s `bvh:width=8,cost=PATH` candidate (a
+/// refit moves the constants little; a model fitted on another machine may move them more).
 #include <map>
 #include <string>
 
