@@ -10,6 +10,9 @@
 #include <fstream>
 #include <random>
 
+#include <tbb/task_arena.h>
+
+#include "accel/bvh/bvh.h"
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
@@ -24,6 +27,7 @@
 #include "cost/sweep.h"
 #include "cost/tree_features.h"
 #include "geometry/input_error.h"
+#include "geometry/triangle_clipping.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -306,6 +310,50 @@ TEST(CostSweep, BadInputLeavesNoFileBehind) {
   std::filesystem::remove(o.out);
   EXPECT_THROW(run_sweep(plan, o), InputError);
   EXPECT_FALSE(std::filesystem::exists(o.out));
+}
+
+/// The end-point overlap by its definition (tree_features.h): every node against every triangle
+/// outside its subtree, O(nodes × N).
+double epo_by_definition(const Bvh2& tree, const Scene& scene) {
+  double total = 0, sum = 0;
+  for (std::size_t t = 0; t < scene.mesh.size(); ++t)
+    total += clipped_triangle_area(scene.mesh.vertex(t, 0), scene.mesh.vertex(t, 1), scene.mesh.vertex(t, 2),
+                                   scene.mesh.triangle_bounds(t));
+  for (std::size_t n = 0; n < tree.nodes.size(); ++n) {
+    std::vector<bool> own(scene.mesh.size(), false);
+    std::vector<std::uint32_t> stack = {static_cast<std::uint32_t>(n)};
+    while (!stack.empty()) {
+      const Bvh2Node& m = tree.nodes[stack.back()];
+      stack.pop_back();
+      if (m.is_leaf()) {
+        for (std::uint32_t i = m.first; i < m.first + m.count; ++i) own[tree.prims[i]] = true;
+      } else {
+        stack.push_back(m.first);
+        stack.push_back(m.first + 1);
+      }
+    }
+    const Bvh2Node& node = tree.nodes[n];
+    double area = 0;
+    for (std::size_t t = 0; t < scene.mesh.size(); ++t)
+      if (!own[t] && scene.mesh.triangle_bounds(t).overlaps(node.box))
+        area += clipped_triangle_area(scene.mesh.vertex(t, 0), scene.mesh.vertex(t, 1), scene.mesh.vertex(t, 2), node.box);
+    sum += (node.is_leaf() ? static_cast<double>(node.count) : 1.0) * area;
+  }
+  return sum / total;
+}
+
+TEST(TreeFeatures, EndPointOverlapMatchesItsDefinitionOnAnyThreadCount) {
+  const auto scene = make_scene("soup:n=400,seed=3");
+  for (const char* spec : {"bvh:width=2", "bvh:width=2,builder=spatial", "bvh:width=2,builder=median"}) {
+    const auto accel = make_accelerator(spec, scene);
+    const Bvh2& tree = dynamic_cast<const Bvh&>(*accel).tree();
+    double one = 0, two = 0;
+    tbb::task_arena(1).execute([&] { one = tree_features(*accel, *scene).epo; });
+    tbb::task_arena(2).execute([&] { two = tree_features(*accel, *scene).epo; });
+    EXPECT_EQ(one, two) << spec;
+    EXPECT_NEAR(one, epo_by_definition(tree, *scene), 1e-9 * one) << spec;
+    EXPECT_GT(one, 0.0) << spec;
+  }
 }
 
 TEST(TreeFeatures, SurfaceAreaExpectationsOfSimpleStructures) {

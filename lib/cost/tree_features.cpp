@@ -112,7 +112,7 @@ class EndPointOverlap {
 
   double operator()() {
     if (g_.total_area <= 0 || tree_.nodes.empty()) return 0.0;
-    walk(0, {}, 0);
+    walk({0, {}}, 0);
     double epo = 0;
     for (double t : term_) epo += t;
     return epo / g_.total_area;
@@ -187,16 +187,16 @@ class EndPointOverlap {
     return children;
   }
 
-  void walk(std::uint32_t node, std::vector<std::uint32_t> foreign, int depth) {
-    std::vector<Item> todo;
-    todo.push_back({node, std::move(foreign)});
+  void walk(Item item, int depth) {
     if (depth < kParallelDepth) {
-      std::vector<Item> children = visit(todo.back());
+      std::vector<Item> children = visit(item);
       if (children.size() == 2)
-        tbb::parallel_invoke([&] { walk(children[0].node, std::move(children[0].foreign), depth + 1); },
-                             [&] { walk(children[1].node, std::move(children[1].foreign), depth + 1); });
+        tbb::parallel_invoke([&] { walk(std::move(children[0]), depth + 1); },
+                             [&] { walk(std::move(children[1]), depth + 1); });
       return;
     }
+    std::vector<Item> todo;
+    todo.push_back(std::move(item));
     while (!todo.empty()) {
       const Item it = std::move(todo.back());
       todo.pop_back();
