@@ -44,34 +44,46 @@ using namespace raylab::experiments;
 
 namespace {
 
-/// Single-thread ns of one watertight ray-triangle test on `scene`'s triangles: 256 of `rays`
-/// against 4096 triangles drawn uniformly at random, repeated for at least 50 ms of this thread's
-/// CPU time (as the traces it is compared with).
-double ns_per_triangle_test(const Scene& scene, const std::vector<Ray>& rays) {
+/// Single-thread ns of one watertight ray-triangle test on `scene`'s triangles, in `rounds`
+/// replicate rounds: in each, 256 of `rays` against 4096 triangles drawn uniformly at random
+/// (the same in every round), repeated for at least `round_seconds` of this thread's CPU time (as
+/// the traces it is compared with). Zero per round for a scene without triangles or no rays.
+std::vector<double> triangle_test_ns_rounds(const Scene& scene, const std::vector<Ray>& rays, int rounds,
+                                            double round_seconds) {
   const Scene& s = scene.instanced() ? *scene.bases.front() : scene;
-  if (s.mesh.size() == 0 || rays.empty()) return 0.0;
+  if (s.mesh.size() == 0 || rays.empty()) return std::vector<double>(static_cast<std::size_t>(rounds), 0.0);
   std::mt19937 rng(7);
   std::uniform_int_distribution<unsigned> pick(0, static_cast<unsigned>(s.mesh.size() - 1));
   std::vector<unsigned> prims(4096);
   for (auto& p : prims) p = pick(rng);
   const std::size_t n_rays = std::min<std::size_t>(256, rays.size());
-  std::size_t hits = 0, tests = 0;
-  double seconds = 0;
+  std::size_t hits = 0;
+  std::vector<double> ns;
   FloatModeScope ftz(true);
-  while (seconds < 0.05) {
-    seconds += thread_cpu_seconds_of([&] {
-      for (std::size_t r = 0; r < n_rays; ++r) {
-        auto ctx = WatertightKernel::prepare(rays[r]);
-        Hit hit;
-        NoCounters none;
-        for (unsigned p : prims) hits += intersect_scene_primitive<WatertightKernel>(s, p, ctx, hit, none);
-      }
-    });
-    tests += n_rays * prims.size();
+  for (int round = 0; round < rounds; ++round) {
+    std::size_t tests = 0;
+    double seconds = 0;
+    while (seconds < round_seconds || tests == 0) {
+      seconds += thread_cpu_seconds_of([&] {
+        for (std::size_t r = 0; r < n_rays; ++r) {
+          auto ctx = WatertightKernel::prepare(rays[r]);
+          Hit hit;
+          NoCounters none;
+          for (unsigned p : prims) hits += intersect_scene_primitive<WatertightKernel>(s, p, ctx, hit, none);
+        }
+      });
+      tests += n_rays * prims.size();
+    }
+    ns.push_back(seconds / static_cast<double>(tests) * 1e9);
   }
   [[maybe_unused]] static volatile std::size_t sink;
   sink = hits;
-  return seconds / static_cast<double>(tests) * 1e9;
+  return ns;
+}
+
+/// One measurement of triangle_test_ns_rounds over at least 50 ms.
+double ns_per_triangle_test(const Scene& scene, const std::vector<Ray>& rays) {
+  return triangle_test_ns_rounds(scene, rays, 1, 0.05).front();
 }
 
 /// Builds `spec` on `scene` inside a TBB arena of `threads` threads (Embree's TBB build and our
@@ -115,6 +127,10 @@ BuildPair best_builds(const std::string& ours, const std::string& theirs, const 
 
 /// Replicate rounds of every timing (lib/cost/replicates.h); full mode takes more.
 int rounds_of(const Options& opt) { return opt.full() ? 9 : 7; }
+/// The rotated walls' curves (claim 7a) compare traces of a few ms per pass: their rounds, each
+/// over kWallsTimeFactor × the per-round time of the other timings.
+int walls_rounds_of(const Options& opt) { return opt.full() ? 15 : 11; }
+constexpr double kWallsTimeFactor = 5.0;
 /// Alternated builds of each builder (their medians and intervals) in the comparison with Embree.
 int build_rounds_of(const Options& opt) { return opt.full() ? 7 : 5; }
 
@@ -382,26 +398,56 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
         "interval of b(`bvh`) − b(`bvh:builder=spatial`) lies above 0 ns, and do not when it lies below. Confirmed "
         "when (1) and (2) hold, holds only under stated conditions when (1) holds and (2) does not, refuted when "
         "(1) does not; inconclusive at this noise when an interval contains its threshold. Intervals: 95% percentile "
-        "bootstrap over the replicate rounds (each angle's rounds resampled, the medians refitted, 2000 resamples, "
+        "bootstrap over the replicate rounds (the rounds resampled, each draw taken for every angle and structure as "
+        "every round traced them all, the medians refitted, 2000 resamples, "
         "fixed seed).\n\n";
   const std::vector<int> angles = opt.full() ? std::vector<int>{0, 5, 10, 15, 20, 30, 45} : std::vector<int>{0, 10, 20, 30, 45};
   const std::vector<std::string> accels = {"bvh", "bvh:builder=spatial", "kdtree", "embree"};
   const std::string rays = opt.full() ? "primary:262144" : "primary:65536";
-  std::map<std::string, double> at_zero;
-  std::map<std::string, std::vector<std::pair<int, Trace>>> by_accel;
+  // Every structure at every angle is built first and all are timed in the same rounds (each round
+  // traces every case in turn), so that a slow spell of the machine falls on the whole curve.
+  struct WallCase {
+    int angle;
+    std::string scene, accel;
+    std::unique_ptr<Aggregate> built;
+    double build_s;
+  };
+  std::vector<WallCase> cases;
+  std::vector<TimedCase> timed;
   for (int angle : angles) {
     const std::string s = fmt::format("walls:n=400,angle={}", angle);
     for (const auto& a : accels) {
       progress("bvh: walls " + s + " " + a);
       auto [accel, build_s] = build(a, run.scene(s), 0);
-      const Trace t = run.trace(*accel, s, rays, 1);
-      run.row("walls", s, rays, a, std::to_string(angle), 1, build_s, *accel, t);
-      by_accel[a].push_back({angle, t});
+      cases.push_back({angle, s, a, std::move(accel), build_s});
     }
   }
-  md += fmt::format("ns/ray: median of {} replicate rounds (each alternating the structure with Embree on the same "
-                    "rays) [95% bootstrap interval]; tests/ray in parentheses.\n\n| structure |",
-                    rounds_of(opt));
+  for (const WallCase& c : cases) timed.push_back({c.built.get(), &run.rays(c.scene, rays)});
+  progress(fmt::format("bvh: walls, {} cases in {} alternated rounds", cases.size(), walls_rounds_of(opt)));
+  ReplicateOptions ro;
+  ro.rounds = walls_rounds_of(opt);
+  ro.min_round_seconds = kWallsTimeFactor * run.min_seconds() / ro.rounds;
+  const ReplicateTiming timing = time_replicates(timed, ro);
+  std::map<std::string, std::vector<std::pair<int, Trace>>> by_accel;
+  const auto embree_slot = static_cast<std::size_t>(std::find(accels.begin(), accels.end(), "embree") - accels.begin());
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const WallCase& c = cases[i];
+    const std::size_t e = i - i % accels.size() + embree_slot;  // Embree on the same angle's rays
+    Trace t = run.counted(*c.built, c.scene, rays);
+    t.ns_rounds = timing.ns[i];
+    t.embree_rounds = timing.ns[e];
+    t.ns_ci = timing.ns_per_ray(i);
+    t.embree_ci = timing.ns_per_ray(e);
+    t.ratio_ci = timing.ratio(e, i);
+    t.ns = t.ns_ci.value;
+    t.embree_ns = t.embree_ci.value;
+    run.row("walls", c.scene, rays, c.accel, std::to_string(c.angle), 1, c.build_s, *c.built, t);
+    by_accel[c.accel].push_back({c.angle, t});
+  }
+  md += fmt::format("ns/ray: median of {} replicate rounds, each tracing every structure at every angle in turn (so a "
+                    "slow spell of the machine falls on the whole curve) [95% bootstrap interval]; tests/ray in "
+                    "parentheses.\n\n| structure |",
+                    walls_rounds_of(opt));
   for (int a : angles) md += fmt::format(" {}° ns/ray [95%] (tests/ray) |", a);
   md += " slowdown at 45° [95%] | rounds |\n|---|";
   for (std::size_t i = 0; i <= angles.size() + 1; ++i) md += "---|";
@@ -412,7 +458,7 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
     for (const auto& [angle, t] : by_accel[a])
       md += a == "embree" ? fmt::format(" {} |", ns_cell(t.ns_ci)) : fmt::format(" {} ({:.1f}) |", ns_cell(t.ns_ci), t.tests);
     const auto& v = by_accel[a];
-    const IntervalEstimate slowdown = bootstrap_fit({v.front().second.ns_rounds, v.back().second.ns_rounds},
+    const IntervalEstimate slowdown = bootstrap_fit_by_round({v.front().second.ns_rounds, v.back().second.ns_rounds},
                                             [](const std::vector<double>& y) { return std::vector<double>{y[1] / y[0]}; })
                                   .parameters[0];
     md += fmt::format(" {:.2f}× [{:.2f}, {:.2f}] | {} |\n", slowdown.value, slowdown.lo, slowdown.hi, slowdown.replicates);
@@ -451,13 +497,14 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
     md += fmt::format("| `{}` | {} | {} | {:.3f} |\n", a, format_with_error(slope[a].values[0], slope[a].std_errors[0]),
                       format_with_error(slope[a].values[1], slope[a].std_errors[1]), slope[a].values[1] / slope[a].values[0]);
   }
-  // The bootstrap: every angle's rounds of `bvh` and of the SBVH resampled, both refitted.
+  // The bootstrap: the rounds of `bvh` and of the SBVH at every angle resampled together (every
+  // round traced them all), both refitted.
   std::vector<double> th;
   std::vector<std::vector<double>> reps;
   for (const auto& [angle, t] : by_accel["bvh"]) th.push_back(angle), reps.push_back(t.ns_rounds);
   for (const auto& [angle, t] : by_accel["bvh:builder=spatial"]) reps.push_back(t.ns_rounds);
   const std::size_t na = th.size();
-  const BootstrapFit boot = bootstrap_fit(reps, [&](const std::vector<double>& y) {
+  const BootstrapFit boot = bootstrap_fit_by_round(reps, [&](const std::vector<double>& y) {
     const std::vector<double> yb(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(na)),
         ys(y.begin() + static_cast<std::ptrdiff_t>(na), y.end());
     const FitResult fb = fit_basis(th, yb, [](double deg) { return box_growth(deg); });
@@ -465,11 +512,12 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
     return std::vector<double>{fb.values[1] / fb.values[0], fs.values[1] / fs.values[0], fb.values[1] - fs.values[1]};
   });
   const IntervalEstimate bvh_ba = boot.parameters[0], sbvh_ba = boot.parameters[1], recovery = boot.parameters[2];
-  const std::string how = "95% percentile bootstrap: each angle's rounds resampled, the medians refitted (2000 resamples, "
+  const std::string how = "95% percentile bootstrap: the rounds resampled (one draw for every angle and structure), the medians refitted "
+                          "(2000 resamples, "
                           "fixed seed)";
   const std::string walls_spec = fmt::format("walls:n=400,angle=θ for θ in {}…{}°, {} rays, single-thread CPU time, {} "
                                              "rounds per angle",
-                                             angles.front(), angles.back(), rays, rounds_of(opt));
+                                             angles.front(), angles.back(), rays, walls_rounds_of(opt));
   const KeyNumber slows = replicated_key("b/a of `bvh`, ns/ray = a + b·g(θ)", bvh_ba,
                                          canonical_spec("bvh") + " on " + walls_spec, how);
   const KeyNumber recovers = replicated_key(
@@ -533,7 +581,8 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
   md += "**Threshold (claim 7c), stated before measuring**: the BVH's traversal share of the trace time is fitted as "
         "a + b·log10 N over the scene sizes; the claim is confirmed when the 95% interval of b lies above 0 (the "
         "share grows with N), refuted when it lies below 0, inconclusive at this noise when it contains 0. The "
-        "interval is a percentile bootstrap over the replicate rounds of each scene's trace time (2000 resamples, "
+        "interval is a percentile bootstrap over the replicate rounds of each scene's trace time and of its triangle "
+        "test time (2000 resamples, "
         "fixed seed; absolute residuals, as a clamped share of 0 has no relative error). The traversal share is a bound: the triangle share is min(1, tests × ns per test / ns per ray) "
         "with the test cost measured cache-warm, a lower bound, so the traversal share (the rest) is an upper bound; "
         "a share of 0% means the clamp was hit, i.e. the cache-warm test cost times the tests exceeds the trace "
@@ -545,10 +594,13 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
   const std::string rays = opt.full() ? "diffuse:131072" : "diffuse:16384";
   std::vector<double> shares, per_visit, nodes, tests;  // of the BVH
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> share_fit;  // structure -> (N, share)
-  std::map<std::string, std::vector<std::vector<double>>> share_rounds;  // structure -> per scene, share per round
+  // The BVH's replicate rounds per scene: its trace times, then the triangle test's times (the
+  // share's interval resamples both).
+  std::vector<std::vector<double>> trace_rounds, test_rounds;
   for (const auto& s : scenes) {
     const auto scene = run.scene(s);
-    const double tri_ns = ns_per_triangle_test(*scene, run.rays(s, rays));
+    test_rounds.push_back(triangle_test_ns_rounds(*scene, run.rays(s, rays), rounds_of(opt), 0.05));
+    const double tri_ns = median(test_rounds.back());
     for (const std::string a : {"bvh", "kdtree"}) {
       if (a == "kdtree" && s == scenes[1] && !opt.full()) continue;
       progress("bvh: shares " + s + " " + a);
@@ -562,9 +614,8 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
                         100 * trav, visit_ns, t.embree_ns, t.embree_ci.lo, t.embree_ci.hi, t.ns_ci.replicates);
       share_fit[a].first.push_back(scene->total_primitive_count());
       share_fit[a].second.push_back(trav);
-      share_rounds[a].emplace_back();
-      for (double ns : t.ns_rounds) share_rounds[a].back().push_back(1.0 - std::min(1.0, t.tests * tri_ns / ns));
       if (a == "bvh") {
+        trace_rounds.push_back(t.ns_rounds);
         shares.push_back(trav);
         per_visit.push_back(visit_ns);
         nodes.push_back(t.nodes + t.leaves);
@@ -601,10 +652,17 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
     fits["bvh"] = none;
   }
   const FitResult& fb = fits["bvh"];
-  // b's interval: every scene's rounds resampled, the shares refitted. Absolute residuals (a share
-  // is a fraction, and a clamped share of 0 has no relative error), Huber loss at 0.1 of a share.
+  // b's interval: every scene's trace rounds and triangle-test rounds resampled, the shares
+  // recomputed from their medians and refitted. Absolute residuals (a share is a fraction, and a
+  // clamped share of 0 has no relative error), Huber loss at 0.1 of a share.
   const auto& sizes = share_fit["bvh"].first;
-  const BootstrapFit boot = bootstrap_fit(share_rounds["bvh"], [&](const std::vector<double>& share) {
+  std::vector<std::vector<double>> points = trace_rounds;
+  points.insert(points.end(), test_rounds.begin(), test_rounds.end());
+  const std::size_t n_scenes = trace_rounds.size();
+  const BootstrapFit boot = bootstrap_fit(points, [&](const std::vector<double>& medians) {
+    std::vector<double> share(n_scenes);
+    for (std::size_t i = 0; i < n_scenes; ++i)
+      share[i] = 1.0 - std::min(1.0, tests[i] * medians[n_scenes + i] / medians[i]);
     return std::vector<double>{
         fit_basis(sizes, share, [](double n) { return std::log10(n); }, ResidualKind::absolute).values[1]};
   });
@@ -614,7 +672,8 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
       "b of the `bvh` traversal share (an upper bound) = a + b·log10 N, per decade of N", boot.parameters[0],
       fmt::format("{} on {}, {} rays, single-thread CPU time, {} rounds per scene", canonical_spec("bvh"), scene_list,
                   rays, rounds_of(opt)),
-      "95% percentile bootstrap: each scene's rounds resampled, the shares refitted with absolute residuals (2000 "
+      "95% percentile bootstrap: each scene's trace rounds and triangle-test rounds resampled, the shares refitted "
+      "with absolute residuals (2000 "
       "resamples, fixed seed)");
   const Threshold rule{"the 95% interval of b, the slope of the BVH's traversal share per decade of N, lies above 0",
                        "above", 0.0};

@@ -74,6 +74,36 @@ TEST(Replicates, BootstrapFitCoversTheTrueSlopeAndShrinksWithLessNoise) {
   EXPECT_THROW(bootstrap_fit({{1.0}, {}}, slope, 10), std::invalid_argument);
 }
 
+TEST(Replicates, BootstrapFitByRoundCancelsASlowSpellCommonToARound) {
+  // y = 2 + 0.5·x at 6 points measured in the same 9 rounds; round r slows every point by a common
+  // factor of up to 30% (a slow spell of the machine), and each point has ±1% of its own noise.
+  // The slope over the intercept does not see the common factor: resampled by round, its interval
+  // is narrow and covers 0.25; resampled point by point, the common factor widens it.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> spell(1.0, 1.3), own(-0.01, 0.01);
+  std::vector<double> round_factor(9);
+  for (double& f : round_factor) f = spell(rng);
+  std::vector<std::vector<double>> reps;
+  for (int x = 1; x <= 6; ++x) {
+    reps.emplace_back();
+    for (double f : round_factor) reps.back().push_back((2 + 0.5 * x) * f * (1 + own(rng)));
+  }
+  const std::vector<double> xs = {1, 2, 3, 4, 5, 6};
+  const auto slope_over_intercept = [&](const std::vector<double>& y) {
+    const FitResult f = fit_basis(xs, y, [](double x) { return x; });
+    return std::vector<double>{f.values[1] / f.values[0]};
+  };
+  const IntervalEstimate paired = bootstrap_fit_by_round(reps, slope_over_intercept, 500).parameters[0];
+  const IntervalEstimate independent = bootstrap_fit(reps, slope_over_intercept, 500).parameters[0];
+  EXPECT_EQ(paired.replicates, 9);
+  EXPECT_LT(paired.lo, 0.25);
+  EXPECT_GT(paired.hi, 0.25);
+  EXPECT_LT(paired.hi - paired.lo, 0.5 * (independent.hi - independent.lo));
+  reps.back().pop_back();
+  EXPECT_THROW(bootstrap_fit_by_round(reps, slope_over_intercept, 10), std::invalid_argument);
+  EXPECT_THROW(bootstrap_fit_by_round({}, slope_over_intercept, 10), std::invalid_argument);
+}
+
 TEST(Replicates, GeometricMeanByRoundTakesEachRoundAcrossCases) {
   // Two cases, five rounds: round r's geometric mean is sqrt(a[r]·b[r]).
   const std::vector<double> a = {1, 4, 2, 2, 8}, b = {4, 1, 2, 8, 2};
@@ -111,6 +141,26 @@ TEST(Replicates, TimeReplicatesGivesOneTimePerContenderAndRound) {
   EXPECT_THROW(time_replicates({}, rays, o), std::invalid_argument);
   o.rounds = 0;
   EXPECT_THROW(time_replicates({bvh.get()}, rays, o), std::invalid_argument);
+}
+
+TEST(Replicates, TimeReplicatesOfCasesTimesEachOnItsOwnRays) {
+  const auto scene = make_scene("sphere:n=200");
+  const auto bvh = make_accelerator("bvh", scene);
+  const std::vector<Ray> primary = make_ray_set("primary:256", scene), diffuse = make_ray_set("diffuse:64", scene);
+  const std::vector<Ray> none;
+  ReplicateOptions o;
+  o.rounds = 3;
+  const ReplicateTiming t = time_replicates({{bvh.get(), &primary}, {bvh.get(), &diffuse}, {bvh.get(), &primary}}, o);
+  ASSERT_EQ(t.ns.size(), 3u);
+  EXPECT_EQ(t.rounds(), 3);
+  for (const auto& c : t.ns)
+    for (double ns : c) EXPECT_GT(ns, 0.0);
+  EXPECT_THROW(time_replicates(std::vector<TimedCase>{}, o), std::invalid_argument);
+  EXPECT_THROW(time_replicates({{bvh.get(), &none}}, o), std::invalid_argument);
+  EXPECT_THROW(time_replicates({{bvh.get(), nullptr}}, o), std::invalid_argument);
+  EXPECT_THROW(time_replicates({{nullptr, &primary}}, o), std::invalid_argument);
+  o.rounds = 0;
+  EXPECT_THROW(time_replicates({{bvh.get(), &primary}}, o), std::invalid_argument);
 }
 
 }  // namespace

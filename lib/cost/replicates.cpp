@@ -63,15 +63,22 @@ IntervalEstimate bootstrap_median(const std::vector<double>& values, int resampl
   return percentile_interval(median(values), std::move(medians), static_cast<int>(values.size()));
 }
 
-BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
-                           const std::function<std::vector<double>(const std::vector<double>&)>& fit, int resamples,
-                           std::uint64_t seed) {
-  if (replicates.empty()) throw std::invalid_argument("bootstrap_fit: no points");
-  if (resamples < 1) throw std::invalid_argument("bootstrap_fit: resamples must be positive");
+namespace {
+
+/// bootstrap_fit and bootstrap_fit_by_round: `by_round` draws one set of round indices per
+/// resample for every point (all points then have the same replicate count).
+BootstrapFit bootstrap_fit_resampled(const std::vector<std::vector<double>>& replicates,
+                                     const std::function<std::vector<double>(const std::vector<double>&)>& fit,
+                                     int resamples, std::uint64_t seed, bool by_round) {
+  const char* name = by_round ? "bootstrap_fit_by_round" : "bootstrap_fit";
+  if (replicates.empty()) throw std::invalid_argument(std::string(name) + ": no points");
+  if (resamples < 1) throw std::invalid_argument(std::string(name) + ": resamples must be positive");
   std::size_t fewest = replicates.front().size();
   std::vector<double> medians;
   for (const auto& r : replicates) {
-    if (r.empty()) throw std::invalid_argument("bootstrap_fit: a point without replicates");
+    if (r.empty()) throw std::invalid_argument(std::string(name) + ": a point without replicates");
+    if (by_round && r.size() != replicates.front().size())
+      throw std::invalid_argument(std::string(name) + ": points with unequal round counts");
     fewest = std::min(fewest, r.size());
     medians.push_back(median(r));
   }
@@ -79,16 +86,26 @@ BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
   std::vector<std::vector<double>> resampled(values.size());
   std::mt19937_64 rng(seed);
   std::vector<double> point(replicates.size()), draw;
+  std::vector<std::size_t> rounds;
   for (int b = 0; b < resamples; ++b) {
+    if (by_round) {
+      std::uniform_int_distribution<std::size_t> pick(0, fewest - 1);
+      rounds.resize(fewest);
+      for (std::size_t& r : rounds) r = pick(rng);
+    }
     for (std::size_t i = 0; i < replicates.size(); ++i) {
       const auto& r = replicates[i];
-      std::uniform_int_distribution<std::size_t> pick(0, r.size() - 1);
       draw.resize(r.size());
-      for (double& d : draw) d = r[pick(rng)];
+      if (by_round) {
+        for (std::size_t k = 0; k < r.size(); ++k) draw[k] = r[rounds[k]];
+      } else {
+        std::uniform_int_distribution<std::size_t> pick(0, r.size() - 1);
+        for (double& d : draw) d = r[pick(rng)];
+      }
       point[i] = median(draw);
     }
     const std::vector<double> p = fit(point);
-    if (p.size() != values.size()) throw std::logic_error("bootstrap_fit: the fit changed its parameter count");
+    if (p.size() != values.size()) throw std::logic_error(std::string(name) + ": the fit changed its parameter count");
     for (std::size_t k = 0; k < p.size(); ++k)
       if (std::isfinite(p[k])) resampled[k].push_back(p[k]);
   }
@@ -98,6 +115,20 @@ BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
     out.parameters.push_back(percentile_interval(values[k], std::move(resampled[k]), static_cast<int>(fewest)));
   }
   return out;
+}
+
+}  // namespace
+
+BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
+                           const std::function<std::vector<double>(const std::vector<double>&)>& fit, int resamples,
+                           std::uint64_t seed) {
+  return bootstrap_fit_resampled(replicates, fit, resamples, seed, false);
+}
+
+BootstrapFit bootstrap_fit_by_round(const std::vector<std::vector<double>>& replicates,
+                                    const std::function<std::vector<double>(const std::vector<double>&)>& fit,
+                                    int resamples, std::uint64_t seed) {
+  return bootstrap_fit_resampled(replicates, fit, resamples, seed, true);
 }
 
 IntervalEstimate geometric_mean_by_round(const std::vector<std::vector<double>>& values, int resamples,
@@ -132,29 +163,38 @@ std::vector<std::vector<double>> alternate_rounds(const std::vector<std::functio
   return seconds;
 }
 
-ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders, const std::vector<Ray>& rays,
-                                const ReplicateOptions& options) {
-  if (contenders.empty()) throw std::invalid_argument("time_replicates: no contenders");
-  if (rays.empty()) throw std::invalid_argument("time_replicates: no rays");
+ReplicateTiming time_replicates(const std::vector<TimedCase>& cases, const ReplicateOptions& options) {
+  if (cases.empty()) throw std::invalid_argument("time_replicates: no contenders");
+  for (const TimedCase& c : cases) {
+    if (!c.primitive) throw std::invalid_argument("time_replicates: a contender without a structure");
+    if (!c.rays || c.rays->empty()) throw std::invalid_argument("time_replicates: no rays");
+  }
   if (options.rounds < 1) throw std::invalid_argument("time_replicates: fewer than one round");
   const TraceOptions trace{options.threads, false, options.any_hit};
   ReplicateTiming t;
   t.thread_cpu = resolve_thread_count(options.threads) == 1;
-  const double per_ray = 1e9 / static_cast<double>(rays.size());
   std::vector<std::function<double()>> measure;
-  for (const Primitive* p : contenders)
-    measure.push_back([&, p] {
+  for (const TimedCase& c : cases)
+    measure.push_back([&, c] {
       double best = std::numeric_limits<double>::infinity(), spent = 0;
       for (int pass = 0; pass < 1000 && (pass == 0 || spent < options.min_round_seconds); ++pass) {
-        const TraceResult r = trace_rays(*p, rays, trace);
+        const TraceResult r = trace_rays(*c.primitive, *c.rays, trace);
         const double s = t.thread_cpu ? r.thread_cpu_seconds : r.seconds;
         best = std::min(best, s);
         spent += s;
       }
-      return best * per_ray;
+      return best * 1e9 / static_cast<double>(c.rays->size());
     });
   t.ns = alternate_rounds(measure, options.rounds);
   return t;
+}
+
+ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders, const std::vector<Ray>& rays,
+                                const ReplicateOptions& options) {
+  if (rays.empty()) throw std::invalid_argument("time_replicates: no rays");
+  std::vector<TimedCase> cases;
+  for (const Primitive* p : contenders) cases.push_back({p, &rays});
+  return time_replicates(cases, options);
 }
 
 std::string format_interval(const IntervalEstimate& i, int digits) {

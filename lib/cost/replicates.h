@@ -69,6 +69,13 @@ struct BootstrapFit {
 BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
                            const std::function<std::vector<double>(const std::vector<double>&)>& fit,
                            int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
+/// As bootstrap_fit, for points measured in the same alternated rounds (time_replicates): each
+/// resample draws one set of rounds and takes it for every point, so a slow spell that fell on a
+/// whole round moves every point of the curve together, as it did when measured, instead of
+/// bending it. Throws std::invalid_argument also for points with unequal round counts.
+BootstrapFit bootstrap_fit_by_round(const std::vector<std::vector<double>>& replicates,
+                                    const std::function<std::vector<double>(const std::vector<double>&)>& fit,
+                                    int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
 
 struct ReplicateOptions {
   int rounds = 5;                  ///< alternated rounds (at least 1; the report uses at least 5)
@@ -96,6 +103,18 @@ struct ReplicateTiming {
 /// Throws std::invalid_argument for no contenders, no rays or fewer than one round.
 ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders, const std::vector<Ray>& rays,
                                 const ReplicateOptions& options);
+
+/// One contender of a comparison across scenes: a structure and the rays it traces (both outlive
+/// the call).
+struct TimedCase {
+  const Primitive* primitive = nullptr;
+  const std::vector<Ray>* rays = nullptr;
+};
+/// As above, each contender on its own rays: the cases of a curve (one per angle, resolution or
+/// scene) share every round, so a slow spell of a shared machine bends no curve. ns[c][r] is
+/// case c's time per ray in round r. Throws std::invalid_argument for no cases, a case without a
+/// primitive or rays, or fewer than one round.
+ReplicateTiming time_replicates(const std::vector<TimedCase>& cases, const ReplicateOptions& options);
 
 /// `rounds` alternated rounds of arbitrary timed work: seconds[c][r] = measure[c]() in round r,
 /// the contenders called in turn within each round (builds, for example, timed by the caller).
