@@ -74,11 +74,11 @@ TEST(Replicates, BootstrapFitCoversTheTrueSlopeAndShrinksWithLessNoise) {
   EXPECT_THROW(bootstrap_fit({{1.0}, {}}, slope, 10), std::invalid_argument);
 }
 
-TEST(Replicates, BootstrapFitByRoundCancelsASlowSpellCommonToARound) {
+TEST(Replicates, FitEachRoundCancelsASlowSpellCommonToARound) {
   // y = 2 + 0.5·x at 6 points measured in the same 9 rounds; round r slows every point by a common
   // factor of up to 30% (a slow spell of the machine), and each point has ±1% of its own noise.
-  // The slope over the intercept does not see the common factor: resampled by round, its interval
-  // is narrow and covers 0.25; resampled point by point, the common factor widens it.
+  // The slope over the intercept does not see the common factor: fitted round by round, its
+  // interval is narrow and covers 0.25; resampled point by point, the common factor widens it.
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> spell(1.0, 1.3), own(-0.01, 0.01);
   std::vector<double> round_factor(9);
@@ -93,15 +93,24 @@ TEST(Replicates, BootstrapFitByRoundCancelsASlowSpellCommonToARound) {
     const FitResult f = fit_basis(xs, y, [](double x) { return x; });
     return std::vector<double>{f.values[1] / f.values[0]};
   };
-  const IntervalEstimate paired = bootstrap_fit_by_round(reps, slope_over_intercept, 500).parameters[0];
+  const BootstrapFit per_round = fit_each_round(reps, slope_over_intercept, 500);
+  const IntervalEstimate paired = per_round.parameters[0];
   const IntervalEstimate independent = bootstrap_fit(reps, slope_over_intercept, 500).parameters[0];
   EXPECT_EQ(paired.replicates, 9);
+  EXPECT_DOUBLE_EQ(per_round.finite_fraction[0], 1.0);
   EXPECT_LT(paired.lo, 0.25);
   EXPECT_GT(paired.hi, 0.25);
   EXPECT_LT(paired.hi - paired.lo, 0.5 * (independent.hi - independent.lo));
+  // A round whose fit is not finite is left out and counted.
+  const BootstrapFit some_infinite = fit_each_round(reps, [&](const std::vector<double>& y) {
+    return std::vector<double>{y[0] > 2.5 * 1.15 ? INFINITY : y[0]};
+  });
+  EXPECT_LT(some_infinite.finite_fraction[0], 1.0);
+  EXPECT_EQ(some_infinite.parameters[0].replicates,
+            static_cast<int>(std::lround(some_infinite.finite_fraction[0] * 9)));
   reps.back().pop_back();
-  EXPECT_THROW(bootstrap_fit_by_round(reps, slope_over_intercept, 10), std::invalid_argument);
-  EXPECT_THROW(bootstrap_fit_by_round({}, slope_over_intercept, 10), std::invalid_argument);
+  EXPECT_THROW(fit_each_round(reps, slope_over_intercept, 10), std::invalid_argument);
+  EXPECT_THROW(fit_each_round({}, slope_over_intercept, 10), std::invalid_argument);
 }
 
 TEST(Replicates, GeometricMeanByRoundTakesEachRoundAcrossCases) {

@@ -63,22 +63,15 @@ IntervalEstimate bootstrap_median(const std::vector<double>& values, int resampl
   return percentile_interval(median(values), std::move(medians), static_cast<int>(values.size()));
 }
 
-namespace {
-
-/// bootstrap_fit and bootstrap_fit_by_round: `by_round` draws one set of round indices per
-/// resample for every point (all points then have the same replicate count).
-BootstrapFit bootstrap_fit_resampled(const std::vector<std::vector<double>>& replicates,
-                                     const std::function<std::vector<double>(const std::vector<double>&)>& fit,
-                                     int resamples, std::uint64_t seed, bool by_round) {
-  const char* name = by_round ? "bootstrap_fit_by_round" : "bootstrap_fit";
-  if (replicates.empty()) throw std::invalid_argument(std::string(name) + ": no points");
-  if (resamples < 1) throw std::invalid_argument(std::string(name) + ": resamples must be positive");
+BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
+                           const std::function<std::vector<double>(const std::vector<double>&)>& fit, int resamples,
+                           std::uint64_t seed) {
+  if (replicates.empty()) throw std::invalid_argument("bootstrap_fit: no points");
+  if (resamples < 1) throw std::invalid_argument("bootstrap_fit: resamples must be positive");
   std::size_t fewest = replicates.front().size();
   std::vector<double> medians;
   for (const auto& r : replicates) {
-    if (r.empty()) throw std::invalid_argument(std::string(name) + ": a point without replicates");
-    if (by_round && r.size() != replicates.front().size())
-      throw std::invalid_argument(std::string(name) + ": points with unequal round counts");
+    if (r.empty()) throw std::invalid_argument("bootstrap_fit: a point without replicates");
     fewest = std::min(fewest, r.size());
     medians.push_back(median(r));
   }
@@ -86,26 +79,16 @@ BootstrapFit bootstrap_fit_resampled(const std::vector<std::vector<double>>& rep
   std::vector<std::vector<double>> resampled(values.size());
   std::mt19937_64 rng(seed);
   std::vector<double> point(replicates.size()), draw;
-  std::vector<std::size_t> rounds;
   for (int b = 0; b < resamples; ++b) {
-    if (by_round) {
-      std::uniform_int_distribution<std::size_t> pick(0, fewest - 1);
-      rounds.resize(fewest);
-      for (std::size_t& r : rounds) r = pick(rng);
-    }
     for (std::size_t i = 0; i < replicates.size(); ++i) {
       const auto& r = replicates[i];
+      std::uniform_int_distribution<std::size_t> pick(0, r.size() - 1);
       draw.resize(r.size());
-      if (by_round) {
-        for (std::size_t k = 0; k < r.size(); ++k) draw[k] = r[rounds[k]];
-      } else {
-        std::uniform_int_distribution<std::size_t> pick(0, r.size() - 1);
-        for (double& d : draw) d = r[pick(rng)];
-      }
+      for (double& d : draw) d = r[pick(rng)];
       point[i] = median(draw);
     }
     const std::vector<double> p = fit(point);
-    if (p.size() != values.size()) throw std::logic_error(std::string(name) + ": the fit changed its parameter count");
+    if (p.size() != values.size()) throw std::logic_error("bootstrap_fit: the fit changed its parameter count");
     for (std::size_t k = 0; k < p.size(); ++k)
       if (std::isfinite(p[k])) resampled[k].push_back(p[k]);
   }
@@ -117,18 +100,33 @@ BootstrapFit bootstrap_fit_resampled(const std::vector<std::vector<double>>& rep
   return out;
 }
 
-}  // namespace
-
-BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
-                           const std::function<std::vector<double>(const std::vector<double>&)>& fit, int resamples,
-                           std::uint64_t seed) {
-  return bootstrap_fit_resampled(replicates, fit, resamples, seed, false);
-}
-
-BootstrapFit bootstrap_fit_by_round(const std::vector<std::vector<double>>& replicates,
-                                    const std::function<std::vector<double>(const std::vector<double>&)>& fit,
-                                    int resamples, std::uint64_t seed) {
-  return bootstrap_fit_resampled(replicates, fit, resamples, seed, true);
+BootstrapFit fit_each_round(const std::vector<std::vector<double>>& replicates,
+                            const std::function<std::vector<double>(const std::vector<double>&)>& fit, int resamples,
+                            std::uint64_t seed) {
+  if (replicates.empty() || replicates.front().empty()) throw std::invalid_argument("fit_each_round: no points or no rounds");
+  const std::size_t rounds = replicates.front().size();
+  for (const auto& r : replicates)
+    if (r.size() != rounds) throw std::invalid_argument("fit_each_round: points with unequal round counts");
+  std::vector<std::vector<double>> by_parameter;  // [parameter][kept round]
+  std::vector<double> point(replicates.size());
+  for (std::size_t r = 0; r < rounds; ++r) {
+    for (std::size_t i = 0; i < replicates.size(); ++i) point[i] = replicates[i][r];
+    const std::vector<double> p = fit(point);
+    if (r == 0) by_parameter.resize(p.size());
+    if (p.size() != by_parameter.size()) throw std::logic_error("fit_each_round: the fit changed its parameter count");
+    for (std::size_t k = 0; k < p.size(); ++k)
+      if (std::isfinite(p[k])) by_parameter[k].push_back(p[k]);
+  }
+  BootstrapFit out;
+  for (const auto& values : by_parameter) {
+    out.finite_fraction.push_back(static_cast<double>(values.size()) / static_cast<double>(rounds));
+    if (values.empty()) {
+      out.parameters.push_back(IntervalEstimate{});
+      continue;
+    }
+    out.parameters.push_back(bootstrap_median(values, resamples, seed));
+  }
+  return out;
 }
 
 IntervalEstimate geometric_mean_by_round(const std::vector<std::vector<double>>& values, int resamples,

@@ -69,13 +69,17 @@ struct BootstrapFit {
 BootstrapFit bootstrap_fit(const std::vector<std::vector<double>>& replicates,
                            const std::function<std::vector<double>(const std::vector<double>&)>& fit,
                            int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
-/// As bootstrap_fit, for points measured in the same alternated rounds (time_replicates): each
-/// resample draws one set of rounds and takes it for every point, so a slow spell that fell on a
-/// whole round moves every point of the curve together, as it did when measured, instead of
-/// bending it. Throws std::invalid_argument also for points with unequal round counts.
-BootstrapFit bootstrap_fit_by_round(const std::vector<std::vector<double>>& replicates,
-                                    const std::function<std::vector<double>(const std::vector<double>&)>& fit,
-                                    int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
+/// For points measured in the same alternated rounds (time_replicates): `fit` applied to each
+/// round's points alone, and every parameter the median over the rounds with its percentile-
+/// bootstrap 95% interval (bootstrap_median; `replicates` is the count of rounds whose fit gave a
+/// finite value, `finite_fraction` their share). A slow spell that fell on a whole round scales
+/// that round's curve and leaves a scale-free parameter (a ratio of times, an optimum) unchanged,
+/// as the per-round ratios to Embree do; bootstrap_fit, which resamples every point's rounds on
+/// its own, would let the spell bend the curve. Throws std::invalid_argument for no points, no
+/// rounds or unequal round counts.
+BootstrapFit fit_each_round(const std::vector<std::vector<double>>& replicates,
+                            const std::function<std::vector<double>(const std::vector<double>&)>& fit,
+                            int resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed);
 
 struct ReplicateOptions {
   int rounds = 5;                  ///< alternated rounds (at least 1; the report uses at least 5)
