@@ -21,12 +21,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <random>
-#include <tuple>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
@@ -580,9 +578,9 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
   md += "**Threshold (claim 7c), stated before measuring**: the BVH's traversal share of the trace time is fitted as "
         "a + b·log10 N over the scene sizes; the claim is confirmed when the 95% interval of b lies above 0 (the "
         "share grows with N), refuted when it lies below 0, inconclusive at this noise when it contains 0. The "
-        "BVH's rounds trace every scene (and Embree on it) and time its triangle test in turn, b is fitted to each "
-        "round's shares alone, and the figure is the median over the rounds with its 95% percentile-bootstrap "
-        "interval (2000 resamples, fixed seed; absolute residuals, as a clamped share of 0 has no relative error). The traversal share is a bound: the triangle share is min(1, tests × ns per test / ns per ray) "
+        "interval is a percentile bootstrap over the replicate rounds of each scene's trace time and of its triangle "
+        "test time (2000 resamples, "
+        "fixed seed; absolute residuals, as a clamped share of 0 has no relative error). The traversal share is a bound: the triangle share is min(1, tests × ns per test / ns per ray) "
         "with the test cost measured cache-warm, a lower bound, so the traversal share (the rest) is an upper bound; "
         "a share of 0% means the clamp was hit, i.e. the cache-warm test cost times the tests exceeds the trace "
         "time.\n\n";
@@ -593,87 +591,34 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
   const std::string rays = opt.full() ? "diffuse:131072" : "diffuse:16384";
   std::vector<double> shares, per_visit, nodes, tests;  // of the BVH
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> share_fit;  // structure -> (N, share)
-  // The BVH on every scene in the same rounds: each round traces every scene's BVH and Embree and
-  // times its triangle test, so that a slow spell of the machine falls on the whole curve; the
-  // share and b are then taken round by round (fit_each_round).
-  struct ShareScene {
-    std::shared_ptr<const Scene> scene;
-    std::unique_ptr<Aggregate> bvh, embree;
-    double build_s = 0;
-  };
-  std::vector<ShareScene> share_scenes;
-  for (const auto& s : scenes) {
-    progress("bvh: shares " + s + " bvh and embree");
-    ShareScene c;
-    c.scene = run.scene(s);
-    std::tie(c.bvh, c.build_s) = build("bvh", c.scene, 0);
-    c.embree = build("embree", c.scene, 0).first;
-    share_scenes.push_back(std::move(c));
-  }
-  ReplicateOptions ro;
-  ro.rounds = rounds_of(opt);
-  ro.min_round_seconds = run.min_seconds() / ro.rounds;
-  constexpr double kTestRoundSeconds = 0.05;
-  std::vector<std::function<double()>> measure;
-  for (std::size_t i = 0; i < scenes.size(); ++i) {
-    const ShareScene& c = share_scenes[i];
-    const std::vector<Ray>& r = run.rays(scenes[i], rays);
-    measure.push_back([&, &r = r] { return fastest_pass_ns_per_ray(*c.bvh, r, ro); });
-    measure.push_back([&, &r = r] { return fastest_pass_ns_per_ray(*c.embree, r, ro); });
-    measure.push_back([&, &r = r] { return triangle_test_ns_rounds(*c.scene, r, 1, kTestRoundSeconds).front(); });
-  }
-  progress(fmt::format("bvh: shares, {} scenes in {} alternated rounds", scenes.size(), ro.rounds));
-  const std::vector<std::vector<double>> timed = alternate_rounds(measure, ro.rounds);
+  // The BVH's replicate rounds per scene: its trace times, then the triangle test's times (the
+  // share's interval resamples both).
   std::vector<std::vector<double>> trace_rounds, test_rounds;
-  std::vector<double> tri_ns_of;  // per scene: the median ns per triangle test
-  for (std::size_t i = 0; i < scenes.size(); ++i) {
-    const ShareScene& c = share_scenes[i];
-    Trace t = run.counted(*c.bvh, scenes[i], rays);
-    t.ns_rounds = timed[3 * i];
-    t.embree_rounds = timed[3 * i + 1];
-    t.ns_ci = bootstrap_median(t.ns_rounds);
-    t.embree_ci = bootstrap_median(t.embree_rounds);
-    std::vector<double> ratio(t.ns_rounds.size());
-    for (std::size_t r = 0; r < ratio.size(); ++r) ratio[r] = t.embree_rounds[r] / t.ns_rounds[r];
-    t.ratio_ci = bootstrap_median(ratio);
-    t.ns = t.ns_ci.value;
-    t.embree_ns = t.embree_ci.value;
-    trace_rounds.push_back(t.ns_rounds);
-    test_rounds.push_back(timed[3 * i + 2]);
-    tri_ns_of.push_back(median(test_rounds.back()));
-    const auto [tri, trav] = run.row("shares", scenes[i], rays, "bvh", "", 1, c.build_s, *c.bvh, t, tri_ns_of.back());
-    const double visit_ns = t.nodes + t.leaves > 0 ? t.ns * trav / (t.nodes + t.leaves) : 0.0;
-    md += fmt::format("| {} | `bvh` | {:.3g} | {:.1f} | {:.1f} | {:.0f} [{:.0f}, {:.0f}] | {:.1f}% | {:.1f}% | {:.2f} | "
-                      "{:.0f} [{:.0f}, {:.0f}] | {} |\n",
-                      scenes[i], c.scene->total_primitive_count(), t.tests, t.nodes, t.ns, t.ns_ci.lo, t.ns_ci.hi,
-                      100 * tri, 100 * trav, visit_ns, t.embree_ns, t.embree_ci.lo, t.embree_ci.hi, t.ns_ci.replicates);
-    share_fit["bvh"].first.push_back(c.scene->total_primitive_count());
-    share_fit["bvh"].second.push_back(trav);
-    shares.push_back(trav);
-    per_visit.push_back(visit_ns);
-    nodes.push_back(t.nodes + t.leaves);
-    tests.push_back(t.tests);
-  }
-  share_scenes.clear();
-  // The kd-tree, scene by scene (its own rounds with Embree), beside the BVH.
-  for (std::size_t i = 0; i < scenes.size(); ++i) {
-    const std::string& s = scenes[i];
-    if (s == scenes[1] && !opt.full()) {
-      run.forget_scene(s);
-      continue;
-    }
+  for (const auto& s : scenes) {
     const auto scene = run.scene(s);
-    progress("bvh: shares " + s + " kdtree");
-    auto [accel, build_s] = build("kdtree", scene, 0);
-    const Trace t = run.trace(*accel, s, rays, 1);
-    const auto [tri, trav] = run.row("shares", s, rays, "kdtree", "", 1, build_s, *accel, t, tri_ns_of[i]);
-    const double visit_ns = t.nodes + t.leaves > 0 ? t.ns * trav / (t.nodes + t.leaves) : 0.0;
-    md += fmt::format("| {} | `kdtree` | {:.3g} | {:.1f} | {:.1f} | {:.0f} [{:.0f}, {:.0f}] | {:.1f}% | {:.1f}% | {:.2f} | "
-                      "{:.0f} [{:.0f}, {:.0f}] | {} |\n",
-                      s, scene->total_primitive_count(), t.tests, t.nodes, t.ns, t.ns_ci.lo, t.ns_ci.hi, 100 * tri,
-                      100 * trav, visit_ns, t.embree_ns, t.embree_ci.lo, t.embree_ci.hi, t.ns_ci.replicates);
-    share_fit["kdtree"].first.push_back(scene->total_primitive_count());
-    share_fit["kdtree"].second.push_back(trav);
+    test_rounds.push_back(triangle_test_ns_rounds(*scene, run.rays(s, rays), rounds_of(opt), 0.05));
+    const double tri_ns = median(test_rounds.back());
+    for (const std::string a : {"bvh", "kdtree"}) {
+      if (a == "kdtree" && s == scenes[1] && !opt.full()) continue;
+      progress("bvh: shares " + s + " " + a);
+      auto [accel, build_s] = build(a, scene, 0);
+      const Trace t = run.trace(*accel, s, rays, 1);
+      const auto [tri, trav] = run.row("shares", s, rays, a, "", 1, build_s, *accel, t, tri_ns);
+      const double visit_ns = t.nodes + t.leaves > 0 ? t.ns * trav / (t.nodes + t.leaves) : 0.0;
+      md += fmt::format("| {} | `{}` | {:.3g} | {:.1f} | {:.1f} | {:.0f} [{:.0f}, {:.0f}] | {:.1f}% | {:.1f}% | {:.2f} | "
+                        "{:.0f} [{:.0f}, {:.0f}] | {} |\n",
+                        s, a, scene->total_primitive_count(), t.tests, t.nodes, t.ns, t.ns_ci.lo, t.ns_ci.hi, 100 * tri,
+                        100 * trav, visit_ns, t.embree_ns, t.embree_ci.lo, t.embree_ci.hi, t.ns_ci.replicates);
+      share_fit[a].first.push_back(scene->total_primitive_count());
+      share_fit[a].second.push_back(trav);
+      if (a == "bvh") {
+        trace_rounds.push_back(t.ns_rounds);
+        shares.push_back(trav);
+        per_visit.push_back(visit_ns);
+        nodes.push_back(t.nodes + t.leaves);
+        tests.push_back(t.tests);
+      }
+    }
     run.forget_scene(s);
   }
   if (shares.size() == 3)
@@ -704,17 +649,17 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
     fits["bvh"] = none;
   }
   const FitResult& fb = fits["bvh"];
-  // b round by round: each round's trace and triangle-test times give its shares, refitted
-  // (fit_each_round). Absolute residuals (a share is a fraction, and a clamped share of 0 has no
-  // relative error), Huber loss at 0.1 of a share.
+  // b's interval: every scene's trace rounds and triangle-test rounds resampled, the shares
+  // recomputed from their medians and refitted. Absolute residuals (a share is a fraction, and a
+  // clamped share of 0 has no relative error), Huber loss at 0.1 of a share.
   const auto& sizes = share_fit["bvh"].first;
   std::vector<std::vector<double>> points = trace_rounds;
   points.insert(points.end(), test_rounds.begin(), test_rounds.end());
   const std::size_t n_scenes = trace_rounds.size();
-  const BootstrapFit boot = fit_each_round(points, [&](const std::vector<double>& round) {
+  const BootstrapFit boot = bootstrap_fit(points, [&](const std::vector<double>& medians) {
     std::vector<double> share(n_scenes);
     for (std::size_t i = 0; i < n_scenes; ++i)
-      share[i] = 1.0 - std::min(1.0, tests[i] * round[n_scenes + i] / round[i]);
+      share[i] = 1.0 - std::min(1.0, tests[i] * medians[n_scenes + i] / medians[i]);
     return std::vector<double>{
         fit_basis(sizes, share, [](double n) { return std::log10(n); }, ResidualKind::absolute).values[1]};
   });
@@ -724,8 +669,9 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
       "b of the `bvh` traversal share (an upper bound) = a + b·log10 N, per decade of N", boot.parameters[0],
       fmt::format("{} on {}, {} rays, single-thread CPU time, {} rounds per scene", canonical_spec("bvh"), scene_list,
                   rays, rounds_of(opt)),
-      "b fitted to each round's shares alone (absolute residuals); the median over the rounds with its 95% "
-      "percentile bootstrap (2000 resamples, fixed seed)");
+      "95% percentile bootstrap: each scene's trace rounds and triangle-test rounds resampled, the shares refitted "
+      "with absolute residuals (2000 "
+      "resamples, fixed seed)");
   const Threshold rule{"the 95% interval of b, the slope of the BVH's traversal share per decade of N, lies above 0",
                        "above", 0.0};
   verdicts.push_back({"7c", "traversal's share of the time grows with the scene (lecture: 73% → 85%)",

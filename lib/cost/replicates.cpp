@@ -161,20 +161,6 @@ std::vector<std::vector<double>> alternate_rounds(const std::vector<std::functio
   return seconds;
 }
 
-double fastest_pass_ns_per_ray(const Primitive& primitive, const std::vector<Ray>& rays, const ReplicateOptions& options) {
-  if (rays.empty()) throw std::invalid_argument("time_replicates: no rays");
-  const TraceOptions trace{options.threads, false, options.any_hit};
-  const bool thread_cpu = resolve_thread_count(options.threads) == 1;
-  double best = std::numeric_limits<double>::infinity(), spent = 0;
-  for (int pass = 0; pass < 1000 && (pass == 0 || spent < options.min_round_seconds); ++pass) {
-    const TraceResult r = trace_rays(primitive, rays, trace);
-    const double s = thread_cpu ? r.thread_cpu_seconds : r.seconds;
-    best = std::min(best, s);
-    spent += s;
-  }
-  return best * 1e9 / static_cast<double>(rays.size());
-}
-
 ReplicateTiming time_replicates(const std::vector<TimedCase>& cases, const ReplicateOptions& options) {
   if (cases.empty()) throw std::invalid_argument("time_replicates: no contenders");
   for (const TimedCase& c : cases) {
@@ -182,11 +168,21 @@ ReplicateTiming time_replicates(const std::vector<TimedCase>& cases, const Repli
     if (!c.rays || c.rays->empty()) throw std::invalid_argument("time_replicates: no rays");
   }
   if (options.rounds < 1) throw std::invalid_argument("time_replicates: fewer than one round");
+  const TraceOptions trace{options.threads, false, options.any_hit};
   ReplicateTiming t;
   t.thread_cpu = resolve_thread_count(options.threads) == 1;
   std::vector<std::function<double()>> measure;
   for (const TimedCase& c : cases)
-    measure.push_back([&, c] { return fastest_pass_ns_per_ray(*c.primitive, *c.rays, options); });
+    measure.push_back([&, c] {
+      double best = std::numeric_limits<double>::infinity(), spent = 0;
+      for (int pass = 0; pass < 1000 && (pass == 0 || spent < options.min_round_seconds); ++pass) {
+        const TraceResult r = trace_rays(*c.primitive, *c.rays, trace);
+        const double s = t.thread_cpu ? r.thread_cpu_seconds : r.seconds;
+        best = std::min(best, s);
+        spent += s;
+      }
+      return best * 1e9 / static_cast<double>(c.rays->size());
+    });
   t.ns = alternate_rounds(measure, options.rounds);
   return t;
 }

@@ -103,11 +103,6 @@ struct ReplicateTiming {
   }
 };
 
-/// One contender's time in one round: `primitive` traces `rays` until options.min_round_seconds
-/// have passed (at least one pass, at most 1000); ns per ray of its fastest pass, in the tracing
-/// thread's CPU time on one thread and in the wall clock on more.
-double fastest_pass_ns_per_ray(const Primitive& primitive, const std::vector<Ray>& rays, const ReplicateOptions& options);
-
 /// Traces `rays` with every one of `contenders` in each of `options.rounds` rounds, in turn.
 /// Throws std::invalid_argument for no contenders, no rays or fewer than one round.
 ReplicateTiming time_replicates(const std::vector<const Primitive*>& contenders, const std::vector<Ray>& rays,
