@@ -140,6 +140,17 @@ struct Trace {
   IntervalEstimate ns_ci, embree_ci, ratio_ci;           ///< 95% bootstrap intervals; ratio: Embree's time over ours
   double nodes = 0, leaves = 0, tests = 0, hits_per_test = 0, hit_rate = 0;
   double ratio() const { return ns > 0 ? embree_ns / ns : 0; }  ///< throughput relative to Embree
+  /// The times of contender `ours` and of Embree (contender `embree`) from the same rounds of `r`:
+  /// their rounds, medians and intervals, and the per-round ratio's.
+  void take_times(const ReplicateTiming& r, std::size_t ours, std::size_t embree) {
+    ns_rounds = r.ns[ours];
+    embree_rounds = r.ns[embree];
+    ns_ci = r.ns_per_ray(ours);
+    embree_ci = r.ns_per_ray(embree);
+    ratio_ci = r.ratio(embree, ours);
+    ns = ns_ci.value;
+    embree_ns = embree_ci.value;
+  }
 };
 
 class Runner {
@@ -202,13 +213,7 @@ class Runner {
     o.threads = threads;
     o.any_hit = is_any_hit_ray_spec(ray_spec);
     const ReplicateTiming r = time_replicates({&accel, embree_accel_.get()}, rays(scene_spec, ray_spec), o);
-    t.ns_rounds = r.ns[0];
-    t.embree_rounds = r.ns[1];
-    t.ns_ci = r.ns_per_ray(0);
-    t.embree_ci = r.ns_per_ray(1);
-    t.ratio_ci = r.ratio(1, 0);
-    t.ns = t.ns_ci.value;
-    t.embree_ns = t.embree_ci.value;
+    t.take_times(r, 0, 1);
     return t;
   }
 
@@ -433,13 +438,7 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
     const WallCase& c = cases[i];
     const std::size_t e = i - i % accels.size() + embree_slot;  // Embree on the same angle's rays
     Trace t = run.counted(*c.built, c.scene, rays);
-    t.ns_rounds = timing.ns[i];
-    t.embree_rounds = timing.ns[e];
-    t.ns_ci = timing.ns_per_ray(i);
-    t.embree_ci = timing.ns_per_ray(e);
-    t.ratio_ci = timing.ratio(e, i);
-    t.ns = t.ns_ci.value;
-    t.embree_ns = t.embree_ci.value;
+    t.take_times(timing, i, e);
     run.row("walls", c.scene, rays, c.accel, std::to_string(c.angle), 1, c.build_s, *c.built, t);
     by_accel[c.accel].push_back({c.angle, t});
   }
@@ -817,19 +816,13 @@ std::string against_embree(Runner& run, const Options& opt) {
         ro.any_hit = any;
         const ReplicateTiming rt = time_replicates(timed, run.rays(s, r), ro);
         const std::size_t fast = accels.size(), robust = accels.size() + 1;
-        const double fast_ns = median(rt.ns[fast]), robust_ns = median(rt.ns[robust]);
+        const double robust_ns = median(rt.ns[robust]);
         std::vector<Trace> t(accels.size());
         std::vector<double> direct(accels.size(), 0.0);
         std::vector<IntervalEstimate> direct_ci(accels.size());
         for (std::size_t i = 0; i < accels.size(); ++i) {
           t[i] = single[i];
-          t[i].ns_rounds = rt.ns[i];
-          t[i].embree_rounds = rt.ns[fast];
-          t[i].ns_ci = rt.ns_per_ray(i);
-          t[i].embree_ci = rt.ns_per_ray(fast);
-          t[i].ratio_ci = rt.ratio(fast, i);
-          t[i].ns = t[i].ns_ci.value;
-          t[i].embree_ns = fast_ns;
+          t[i].take_times(rt, i, fast);
           if (threads == 1 && i < 2) {
             direct_ci[i] = own_loop_over_direct(*built[i], i == 0 ? direct_robust : direct_fast, run.rays(s, r), any,
                                                 rounds_of(opt));
@@ -973,13 +966,7 @@ std::string reinsertion(Runner& run, const Options& opt) {
                         cell(extra_ci), r, cell(gain), cell(opt_embree), cell(plain_embree), repay, ro.rounds);
       for (int which : {0, 1}) {
         Trace t = run.counted(which == 0 ? *optimised : *plain, s, r);
-        t.ns_rounds = rt.ns[which];
-        t.embree_rounds = rt.ns[2];
-        t.ns_ci = rt.ns_per_ray(which);
-        t.embree_ci = rt.ns_per_ray(2);
-        t.ratio_ci = rt.ratio(2, which);
-        t.ns = t.ns_ci.value;
-        t.embree_ns = t.embree_ci.value;
+        t.take_times(rt, which, 2);
         const std::string spec = which == 0 ? "bvh:optimize=reinsert" : "bvh";
         run.row("reinsert", s, r, spec, "", 1, which == 0 ? optimised_s : plain_s, which == 0 ? *optimised : *plain, t,
                 -1, 0.0, 0.0, bootstrap_median(seconds[which]));
