@@ -191,7 +191,15 @@ struct CertifiedKernel {
                              std::abs(cx) + std::abs(cy));
     const float Z = std::max(std::max(std::abs(az), std::abs(bz)), std::abs(cz));
     const float B = edge_bound(S, Z);
-    if ((U > B || V > B || W > B) && (U < -B || V < -B || W < -B)) return false;  // surely misses
+    if (std::max(std::max(U, V), W) > B && std::min(std::min(U, V), W) < -B) return false;  // surely misses
+    return decide_unrejected(c, prim, p0, p1, p2, U, V, W, B, az, bz, cz, hit);
+  }
+
+  /// The rest of intersect() for a triangle the float filter did not reject, out of line: most
+  /// triangles a ray is offered are rejected, and intersect() stays small enough to inline.
+  [[gnu::noinline]] static bool decide_unrejected(Context& c, unsigned prim, const Vec3f& p0, const Vec3f& p1,
+                                                  const Vec3f& p2, float U, float V, float W, float B, float az,
+                                                  float bz, float cz, TriangleHit& hit) {
     if (c.cull) {
       float lo, hi, t = 0.0f;
       const bool crossing = depth_bounds(c, U, V, W, B, az, bz, cz, lo, hi, t);

@@ -146,60 +146,90 @@ struct PacketKernel<CertifiedKernel> {
   }
 
   /// The kLanes lanes of the kLanes / kPacketWidth consecutive packets from `p`, in the order
-  /// described below.
+  /// described below. The float filter is inline and frameless; a packet with a lane it leaves
+  /// open goes to decide_open_lanes, out of line (most packets a ray is offered are misses).
   template <bool kAnyHit, int kLanes>
   static int intersect_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
     static_assert(kLanes == kPacketWidth || kLanes == 2 * kPacketWidth);
     using F = simd::Float<kLanes>;
-    const auto filled_lanes = [p] {
-      unsigned m = (1u << p[0].size()) - 1;
-      if constexpr (kLanes == 2 * kPacketWidth) m |= ((1u << p[1].size()) - 1) << kPacketWidth;
-      return m;
-    };
-    const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
-    const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
-    if (!c.filter) {  // no float filter for this ray: every lane is decided exactly
-      int last = -1;
-      for (unsigned m = filled_lanes(); m != 0; m &= m - 1) {
-        const int i = std::countr_zero(m);
-        if (CertifiedKernel::intersect(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), hit)) {
-          last = i;
-          if constexpr (kAnyHit) return i;
-        }
-      }
-      return last;
-    }
+    if (!c.filter) return decide_unfiltered<kAnyHit, kLanes>(c, p, hit);
     const F ox = F::broadcast(r.ox), oy = F::broadcast(r.oy), oz = F::broadcast(r.oz);
     const F sx = F::broadcast(r.sx), sy = F::broadcast(r.sy);
+    const F px = load_lanes<kLanes>(p, 0, c.kx);
     const F az0 = load_lanes<kLanes>(p, 0, c.kz) - oz, bz0 = load_lanes<kLanes>(p, 1, c.kz) - oz,
             cz0 = load_lanes<kLanes>(p, 2, c.kz) - oz;
-    const F ax = (load_lanes<kLanes>(p, 0, c.kx) - ox) - sx * az0, ay = (load_lanes<kLanes>(p, 0, c.ky) - oy) - sy * az0;
+    const F ax = (px - ox) - sx * az0, ay = (load_lanes<kLanes>(p, 0, c.ky) - oy) - sy * az0;
     const F bx = (load_lanes<kLanes>(p, 1, c.kx) - ox) - sx * bz0, by = (load_lanes<kLanes>(p, 1, c.ky) - oy) - sy * bz0;
     const F cx = (load_lanes<kLanes>(p, 2, c.kx) - ox) - sx * cz0, cy = (load_lanes<kLanes>(p, 2, c.ky) - oy) - sy * cz0;
     const F U = cx * by - cy * bx;
     const F V = ax * cy - ay * cx;
     const F W = bx * ay - by * ax;
-    const F S = max(max(abs(ax) + abs(ay), abs(bx) + abs(by)), abs(cx) + abs(cy));
-    const F Z = max(max(abs(az0), abs(bz0)), abs(cz0));
-    const F B = S * (F::broadcast(14.0f * 0x1p-24f) * S + F::broadcast(32.0f * 0x1p-24f) * Z) +
-                F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-119f) * (F::broadcast(1.0f) + S + Z);
-    const F nB = F::broadcast(0.0f) - B;
-    const F hi_edge = max(max(U, V), W), lo_edge = min(min(U, V), W);
-    unsigned open = ~((hi_edge > B) & (lo_edge < nB)) & ((1u << kLanes) - 1);
+    // CertifiedKernel::edge_bound(2·M, Z) with M = max_q max(|Q̂x|, |Q̂y|), since S <= 2·M: seven
+    // max-abs operations instead of sixteen for S and Z; the factor 2 is folded into the constants
+    // (exactly), and 2^-119·(1 + 2M + Z) <= 2^-118·(1/2 + M + Z).
+    const F M = max_abs(max_abs(max_abs(ax, ay), max_abs(bx, by)), max_abs(cx, cy));
+    const F Z = max_abs(max_abs(az0, bz0), cz0);
+    const F B = M * (F::broadcast(28.0f * 0x1p-23f) * M + F::broadcast(32.0f * 0x1p-23f) * Z) +
+                F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-118f) * (F::broadcast(0.5f) + M + Z);
+    // Open: not surely missed (two edge functions of certain opposite signs), in use. Unused lanes
+    // have NaN vertices, scene triangles finite ones (the scene loaders reject others).
+    const unsigned open = ~((max(max(U, V), W) > B) & (min(min(U, V), W) < F::broadcast(0.0f) - B)) & (px == px);
     if (open == 0) return -1;
-    open &= filled_lanes();  // unused lanes (NaN vertices) are open
+    return decide_open_lanes<kAnyHit, kLanes>(c, r, p, U, V, W, B, az0, bz0, cz0, open, hit);
+  }
+
+ private:
+  /// The lanes in use of the kLanes / kPacketWidth packets from `p`.
+  template <int kLanes>
+  static unsigned filled_lanes(const TrianglePacket* p) {
+    unsigned m = (1u << p[0].size()) - 1;
+    if constexpr (kLanes == 2 * kPacketWidth) m |= ((1u << p[1].size()) - 1) << kPacketWidth;
+    return m;
+  }
+
+  /// A ray without the float filter: every lane is decided by the scalar kernel (the double
+  /// stage and the exact path).
+  template <bool kAnyHit, int kLanes>
+  [[gnu::noinline]] static int decide_unfiltered(CertifiedKernel::Context& c, const TrianglePacket* p, TriangleHit& hit) {
+    int last = -1;
+    for (unsigned m = filled_lanes<kLanes>(p); m != 0; m &= m - 1) {
+      const int i = std::countr_zero(m);
+      const TrianglePacket& q = p[i / kPacketWidth];
+      const int l = i % kPacketWidth;
+      if (CertifiedKernel::intersect(c, q.prim[l], q.vertex(l, 0), q.vertex(l, 1), q.vertex(l, 2), hit)) {
+        last = i;
+        if constexpr (kAnyHit) return i;
+      }
+    }
+    return last;
+  }
+
+  /// The lanes of `open` (a nonempty set the float filter did not reject), from the filter's edge
+  /// functions U, V, W, their bound B and the vertices' az, bz, cz.
+  template <bool kAnyHit, int kLanes>
+  [[gnu::noinline]] static int decide_open_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p,
+                                                 simd::Float<kLanes> U, simd::Float<kLanes> V, simd::Float<kLanes> W,
+                                                 simd::Float<kLanes> B, simd::Float<kLanes> az0,
+                                                 simd::Float<kLanes> bz0, simd::Float<kLanes> cz0, unsigned open,
+                                                 TriangleHit& hit) {
+    using F = simd::Float<kLanes>;
+    const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
+    const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
+    open &= filled_lanes<kLanes>(p);
+    if (open == 0) return -1;
     // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
     // the exact t of every lane, the plane crossing's where the edge functions certify a
     // crossing of the interior, else the vertices' depth range.
     alignas(32) float lo[kLanes], hi[kLanes], ts[kLanes];
     unsigned crossing = 0;
     if (c.cull) {
+      const F nB = F::broadcast(0.0f) - B;
       const F sz = F::broadcast(r.sz);
       const F za = az0 * sz, zb = bz0 * sz, zc = cz0 * sz;
       const F zmin = min(min(za, zb), zc), zmax = max(max(za, zb), zc);
       const F aU = abs(U), aV = abs(V), aW = abs(W), D = aU + aV + aW;
       const F tiny = F::broadcast(0x1p-60f), big = F::broadcast(0x1p127f);
-      const unsigned certain = (lo_edge > B) | (hi_edge < nB);
+      const unsigned certain = (min(min(U, V), W) > B) | (max(max(U, V), W) < nB);
       const F inv_D = F::broadcast(1.0f) / D;
       const F t = (aU * za + aV * zb + aW * zc) * inv_D;
       const F E = F::broadcast(7.0f) * (B * inv_D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
