@@ -110,13 +110,21 @@ struct CertifiedKernel {
 
   static Context prepare(const Ray& ray) {
     Context c;
+    prepare(c, ray);
+    return c;
+  }
+  /// prepare(ray) into an existing context (a previous ray's, or a new one), without moving a
+  /// whole Context: prepare_context() picks this form.
+  static void prepare(Context& c, const Ray& ray) {
     c.ray = ray;
     set_watertight_shear(c, ray.dir);
     c.filter = std::abs(ray.dir[c.kz]) >= 0x1p-60f && std::isfinite(c.sz);
     c.cull = c.filter && std::abs(ray.dir[c.kz]) <= 0x1p100f;
     c.upper = ray.tmax;
     c.reach = reach_of(ray.tmax);
-    return c;
+    c.has = c.tight = c.best_in_exact = false;
+    c.prim = kInvalidId;
+    c.exact.reset();
   }
   static float closest(const Context& c) { return c.reach; }
   /// A float >= the exact t of the current first hit, or tmax while there is none.

@@ -78,6 +78,14 @@ void set_watertight_shear(Context& c, const Vec3f& dir) {
   c.sz = 1.0f / dir[c.kz];
 }
 
+/// Sets `ctx` to Kernel::prepare(ray): in place where the kernel has prepare(Context&, const Ray&)
+/// (a context too large to return and move per ray), else by assignment.
+template <class Kernel>
+void prepare_context(typename Kernel::Context& ctx, const Ray& ray) {
+  if constexpr (requires { Kernel::prepare(ctx, ray); }) Kernel::prepare(ctx, ray);
+  else ctx = Kernel::prepare(ray);
+}
+
 struct WatertightKernel {
   /// The per-ray shear of Woop et al.: kz is the dominant axis of the direction; kx, ky are
   /// swapped when d[kz] < 0 to keep the winding.

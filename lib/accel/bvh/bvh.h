@@ -84,7 +84,7 @@ class Bvh final : public AggregateBase<Bvh> {
     typename PacketKernel<Kernel>::Ray packet_ray{};
     bool prepared = kAnyHit;
     if constexpr (kAnyHit) {
-      ctx = Kernel::prepare(ray);
+      prepare_context<Kernel>(ctx, ray);
       packet_ray = typename PacketKernel<Kernel>::Ray(ctx);
     }
     const Scene& scene = *scene_;
@@ -93,7 +93,7 @@ class Bvh final : public AggregateBase<Bvh> {
     return traverse_wide_bvh<N, kRobust, kAnyHit>(
         wide.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
           if (!prepared) {
-            ctx = Kernel::prepare(ray);  // ctx's closest is ray.tmax: no leaf has hit yet
+            prepare_context<Kernel>(ctx, ray);  // ctx's closest is ray.tmax: no leaf has hit yet
             packet_ray = typename PacketKernel<Kernel>::Ray(ctx);
             prepared = true;
           }

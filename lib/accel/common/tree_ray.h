@@ -69,7 +69,7 @@ struct TreeRay {
   /// Prepares the kernel's context (and its packet form) for `ray`, without the root interval
   /// (for a traversal that computes its own).
   void prepare(const Ray& ray) {
-    ctx = Kernel::prepare(ray);
+    prepare_context<Kernel>(ctx, ray);
     packet = typename PacketKernel<Kernel>::Ray(ctx);
   }
 
