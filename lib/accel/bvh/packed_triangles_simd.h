@@ -171,8 +171,9 @@ struct PacketKernel<CertifiedKernel> {
     const F Z = max_abs(max_abs(az0, bz0), cz0);
     const F B = M * (F::broadcast(28.0f * 0x1p-23f) * M + F::broadcast(32.0f * 0x1p-23f) * Z) +
                 F::broadcast(0x1p-38f) * (Z * Z) + F::broadcast(0x1p-118f) * (F::broadcast(0.5f) + M + Z);
-    // Open: not surely missed (two edge functions of certain opposite signs), in use. Unused lanes
-    // have NaN vertices, scene triangles finite ones (the scene loaders reject others).
+    // Open: not surely missed (two edge functions of certain opposite signs) and in use: unused
+    // lanes have NaN vertices, which no scene has (loaders reject non-finite coordinates; scene
+    // specs produce finite ones, or infinite past the float range, never NaN).
     const unsigned open = ~((max(max(U, V), W) > B) & (min(min(U, V), W) < F::broadcast(0.0f) - B)) & (px == px);
     if (open == 0) return -1;
     return decide_open_lanes<kAnyHit, kLanes>(c, r, p, U, V, W, B, az0, bz0, cz0, open, hit);
