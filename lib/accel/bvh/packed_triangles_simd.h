@@ -205,8 +205,8 @@ struct PacketKernel<CertifiedKernel> {
     return last;
   }
 
-  /// The lanes of `open` (a nonempty set the float filter did not reject), from the filter's edge
-  /// functions U, V, W, their bound B and the vertices' az, bz, cz.
+  /// The lanes of `open` (a nonempty set of lanes in use that the float filter did not reject),
+  /// from the filter's edge functions U, V, W, their bound B and the vertices' az, bz, cz.
   template <bool kAnyHit, int kLanes>
   [[gnu::noinline]] static int decide_open_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p,
                                                  simd::Float<kLanes> U, simd::Float<kLanes> V, simd::Float<kLanes> W,
@@ -216,8 +216,6 @@ struct PacketKernel<CertifiedKernel> {
     using F = simd::Float<kLanes>;
     const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
     const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
-    open &= filled_lanes<kLanes>(p);
-    if (open == 0) return -1;
     // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
     // the exact t of every lane, the plane crossing's where the edge functions certify a
     // crossing of the interior, else the vertices' depth range.
