@@ -1,5 +1,5 @@
 // The adversarial suite of issue 6 ("where methods fail"): every accelerator the factory knows,
-// with its listed variants (so each of the three kernels through brute:kernel=watertight|mt|exact,
+// with its listed variants (so each of the four kernels through brute and brute:kernel=watertight|mt|exact,
 // and Embree with and without its robust mode), against the exact oracle on the cases of
 // tests/test_adversarial_cases.h: shared edges and vertices of closed CGAL demo meshes and of
 // high-valence fans, axis-parallel rays on split planes, coplanar, duplicated and degenerate

@@ -65,10 +65,10 @@ TEST(CertifiedInstances, SpheresUnderANonUniformScaleAreRefusedAsTheFlatCopyRefu
 TEST(CertifiedInstances, TheLectureSceneOfThreeBillionTrianglesIsTracedCertified) {
   const auto scene = make_scene(kLectureInstancedSceneSpec);
   ASSERT_GT(scene->total_primitive_count(), kExactOracleMaxPrimitives);
-  const auto certified = make_accelerator("bvh:kernel=certified", scene);
+  const auto certified = make_accelerator("bvh", scene);
   ASSERT_NE(dynamic_cast<const CertifiedInstances*>(certified.get()), nullptr)
-      << "beyond the flat copy's limit, kernel=certified answers from the bases alone";
-  const auto watertight = make_accelerator("bvh", scene);
+      << "beyond the flat copy's limit, the default (certified) kernel answers from the bases alone";
+  const auto watertight = make_accelerator("bvh:kernel=watertight", scene);
   const auto rays = make_ray_set("primary:1024", scene);
   const TraceResult got = trace_rays(*certified, rays, TraceOptions{1});
   const TraceResult reference = trace_rays(*watertight, rays, TraceOptions{1});

@@ -252,7 +252,7 @@ TEST(CertifiedKernel, CountsRaysThatTookTheExactPathOnce) {
   EXPECT_EQ(v.counters.exact_fallbacks, vertex_rays.size()) << "every ray exactly through a vertex needs the exact path";
   const TraceResult p = trace_rays(*accel, primary, TraceOptions{1, true, false});
   EXPECT_LT(p.counters.exact_fallbacks, primary.size() / 50) << "primary rays mostly certify in float";
-  const auto watertight = make_accelerator("bvh", scene);
+  const auto watertight = make_accelerator("bvh:kernel=watertight", scene);
   EXPECT_EQ(trace_rays(*watertight, vertex_rays, TraceOptions{1, true, false}).counters.exact_fallbacks, 0u);
 }
 

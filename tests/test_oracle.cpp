@@ -1,8 +1,8 @@
 // The one parameterised oracle suite (after CGAL's AABB_tree Tree_vs_naive and Embree's verify):
-// every accelerator the factory knows, with its default parameters and its listed variants
-// (kernel=certified among them), against the exact oracle on random, procedural, degenerate and
-// closed meshes, far from the origin and tiny, with rays of every generator: touching and
-// grazing rays on closed meshes included. The oracle classifies every ray (contact_classes.h)
+// every accelerator the factory knows, with its default parameters (the certified kernel wherever
+// a kernel is chosen) and its listed variants (kernel=watertight among them), against the exact
+// oracle on random, procedural, degenerate and closed meshes, far from the origin and tiny, with
+// rays of every generator: touching and grazing rays on closed meshes included. The oracle classifies every ray (contact_classes.h)
 // and each accelerator is held to its own stated AccuracyBound per class, counted as
 // `raylab trace --check exact` counts it (accel/common/hit_comparison.h): by the tolerance rule,
 // or, for methods stated exact (the exact and certified kernels), by the exact rule with 0

@@ -144,7 +144,7 @@ TEST(SceneImport, MeshUnderTwoNodesIsOneBaseWithTwoInstances) {
     EXPECT_TRUE(info.closed);
   }
   const auto scene = make_scene(dir / "two.gltf");
-  const auto top = make_accelerator("bvh", scene);
+  const auto top = make_accelerator("bvh:kernel=watertight", scene);  // the float instancing path
   const auto* primitives = dynamic_cast<const PrimitiveBvh*>(top.get());
   ASSERT_NE(primitives, nullptr);
   EXPECT_EQ(primitives->size(), 3u) << "two instances and the flat geometry";

@@ -114,7 +114,7 @@ TEST(ToolCli, TracePrintsOneJsonObjectAndBruteForceMatchesTheOracle) {
 // --hits-out; the exact path is counted per ray.
 TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   const std::string hits_path = write_file("classified.csv", "");
-  const ToolRun w = run_tool("trace --scene sphere:n=2000 --accel brute --rays touching:500 --threads 2 --check exact "
+  const ToolRun w = run_tool("trace --scene sphere:n=2000 --accel brute:kernel=watertight --rays touching:500 --threads 2 --check exact "
                              "--classify --json --hits-out " + hits_path);
   ASSERT_EQ(w.status, 0) << w.err;
   const auto j = nlohmann::json::parse(w.out);
@@ -140,7 +140,7 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(header, "ray,prim,t,u,v,contact");
   EXPECT_EQ(row.substr(row.rfind(',') + 1), "touching+ill");
 
-  const ToolRun c = run_tool("trace --scene sphere:n=2000 --accel bvh:kernel=certified --rays touching:500 --threads 2 "
+  const ToolRun c = run_tool("trace --scene sphere:n=2000 --accel bvh --rays touching:500 --threads 2 "
                              "--check exact --json");
   ASSERT_EQ(c.status, 0) << c.err;
   const auto k = nlohmann::json::parse(c.out);
@@ -157,12 +157,17 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(j["guarantee"]["rule"], "tolerance");
   EXPECT_EQ(j["guarantee"]["max_mismatch_rate"]["touching"], 1.0);
 
-  // `raylab accels` states each bound per class, and the certified one beside the default.
+  // The certified kernel is the default; robust=off rules it out, and trace names the kernel that ran.
+  const ToolRun f = run_tool("trace --scene sphere:n=2000 --accel bvh:robust=off --rays primary:100 --json");
+  ASSERT_EQ(f.status, 0) << f.err;
+  EXPECT_EQ(nlohmann::json::parse(f.out)["kernel"], "watertight");
+
+  // `raylab accels` states each bound per class, and the watertight one beside the default.
   const ToolRun a = run_tool("accels");
   ASSERT_EQ(a.status, 0) << a.err;
   EXPECT_NE(a.out.find("max mismatch rate per class (tolerance rule): crossing 0 (edge/vertex-aimed: 0), touching 1"),
             std::string::npos);
-  EXPECT_NE(a.out.find("accuracy with kernel=certified"), std::string::npos);
+  EXPECT_NE(a.out.find("accuracy with kernel=watertight"), std::string::npos);
   EXPECT_NE(a.out.find("(exact rule): crossing 0 (edge/vertex-aimed: 0), touching 0, on_surface 0, ill_conditioned 0"),
             std::string::npos);
 }

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -117,13 +118,34 @@ void print_accuracy(const std::string& label, const AccuracyBound& b) {
             << b.on_surface << ", ill_conditioned " << b.ill_conditioned << "\n";
 }
 
+/// The kernel a canonical spec's `kernel` value names. A default that another parameter decides is
+/// written as its rule, `certified (robust=on), watertight (robust=off)`: the clause whose
+/// condition the spec meets.
+std::string kernel_in_effect(const std::string& value, const std::map<std::string, std::string>& params) {
+  const auto trim = [](const std::string& t) {
+    const std::size_t first = t.find_first_not_of(", "), last = t.find_last_not_of(", ");
+    return first == std::string::npos ? std::string() : t.substr(first, last - first + 1);
+  };
+  for (std::size_t at = 0;;) {
+    const std::size_t open = value.find('(', at), close = value.find(')', open);
+    if (open == std::string::npos || close == std::string::npos) return value;
+    const std::string condition = value.substr(open + 1, close - open - 1);
+    const std::size_t eq = condition.find('=');
+    const auto it = params.find(condition.substr(0, eq));
+    if (eq != std::string::npos && it != params.end() && it->second == condition.substr(eq + 1))
+      return trim(value.substr(at, open - at));
+    at = close + 1;
+  }
+}
+
 /// The kernel `spec` runs (its kernel= value, defaults expanded; the accelerator's own name when it
 /// has no kernel parameter, as Embree's) and the accuracy it states (`raylab accels`), for trace.
 void put_kernel_guarantee(nlohmann::ordered_json& j, const std::string& spec) {
   const SpecString canonical = parse_spec(canonical_spec(spec));
+  std::map<std::string, std::string> params;
+  for (const auto& [key, value] : canonical.params) params[key] = value;
   std::string kernel = canonical.name;
-  for (const auto& [key, value] : canonical.params)
-    if (key == "kernel") kernel = value;
+  if (const auto it = params.find("kernel"); it != params.end()) kernel = kernel_in_effect(it->second, params);
   const AccuracyBound b = accuracy_bound(spec);
   j["kernel"] = kernel;
   j["guarantee"] = {{"exact", b.exact},
@@ -144,10 +166,11 @@ void print_accels() {
       std::cout << "    " << p.key << "=...  " << p.description << " (default " << p.default_value << ")\n";
     SpecReader none(parse_spec(k.name));
     print_accuracy("accuracy", k.accuracy(none));
-    const bool has_certified = std::any_of(k.params.begin(), k.params.end(), [](const ParamDoc& p) {
-      return p.key == "kernel" && p.description.find("certified") != std::string::npos;
+    // The default kernel is the certified one; the watertight one is listed beside it.
+    const bool has_watertight = std::any_of(k.params.begin(), k.params.end(), [](const ParamDoc& p) {
+      return p.key == "kernel" && p.description.find("watertight") != std::string::npos;
     });
-    if (has_certified) print_accuracy("accuracy with kernel=certified", accuracy_bound(k.name + ":kernel=certified"));
+    if (has_watertight) print_accuracy("accuracy with kernel=watertight", accuracy_bound(k.name + ":kernel=watertight"));
   }
 }
 

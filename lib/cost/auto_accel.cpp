@@ -354,8 +354,10 @@ AccelKind make_auto_kind() {
             std::vector<std::string> families;
             for (const auto& [family, m] : models.families) families.push_back(family);
             AccuracyBound loosest;
+            loosest.exact = true;
             for (const std::string& spec : auto_candidate_specs(families, model)) {
               const AccuracyBound b = accuracy_bound(spec);
+              loosest.exact = loosest.exact && b.exact;
               loosest.crossing_features = std::max(loosest.crossing_features, b.crossing_features);
               loosest.crossing_other = std::max(loosest.crossing_other, b.crossing_other);
               loosest.touching = std::max(loosest.touching, b.touching);

@@ -286,7 +286,7 @@ inline int build_and_trace(const std::uint8_t* data, std::size_t size) {
     if (spec == "brute:kernel=exact")
       for (std::size_t i = 0; i < rays.size(); ++i)
         if (res.hits[i].valid() != oracle_hits[i].valid()) fail("the exact kernel and the exact oracle disagree on ray " + std::to_string(i));
-    // Methods stated exact (every kernel=certified) must give the oracle's first hit by the exact
+    // Methods stated exact (every structure's default, the certified kernel) must give the oracle's first hit by the exact
     // rule, and the oracle's any-hit answer.
     if (accuracy_bound(spec).exact) {
       const HitComparison c = compare_hits_exact(*scene, rays, res.hits, oracle_hits);

@@ -64,7 +64,7 @@ AccelKind make_bsp_kind() {
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_bsp_config(r).kernel, "exact classification, error-bounded traversal");
           },
-          {"axis_candidates=0,c_isect=1.5", "cost=default", "kernel=certified"}};
+          {"axis_candidates=0,c_isect=1.5", "cost=default", "kernel=watertight"}};
 }
 
 namespace {

@@ -19,7 +19,7 @@ struct BspConfig {
   int leaf_size = 4;
   /// Safety depth limit; 0 means 6 + 1.3·log2(N), at most 48.
   int max_depth = 0;
-  KernelChoice kernel = KernelChoice::watertight;
+  KernelChoice kernel = KernelChoice::certified;
 };
 
 int bsp_max_depth(const BspConfig& config, std::size_t n);

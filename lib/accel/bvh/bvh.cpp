@@ -43,8 +43,9 @@ std::vector<ParamDoc> bvh_params() {
           {"alpha", "1e-5", "SBVH: try spatial splits where child overlap exceeds alpha * SA(root)"},
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
           {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
-          {"robust", "on", "on: Ize's conservative box test + watertight kernel | off: the fast variant"},
-          kernel_param_doc(),
+          {"robust", "on",
+           "on: Ize's conservative box test + `kernel` | off: the fast variant (plain slab test, Moller-Trumbore)"},
+          kernel_param_doc("certified (robust=on), watertight (robust=off)"),
           {"threads", "0", "build threads; 0 = all"},
           {"optimize", "none",
            "none | reinsert (Bittner et al. 2013: reinsert the children of the least efficient nodes where the SAH "
@@ -85,7 +86,7 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
   c.robust = r.get_bool("robust", true);
-  c.kernel = read_kernel_choice(r);
+  c.kernel = read_kernel_choice(r, c.robust ? KernelChoice::certified : KernelChoice::watertight);
   if (c.kernel == KernelChoice::certified && !c.robust)
     throw InputError("accelerator '" + r.spec().text + "': kernel=certified needs the conservative box test (robust=on)");
   c.threads = static_cast<int>(r.get_int("threads", 0, 0, 1024));
@@ -123,8 +124,8 @@ AccelKind make_bvh_kind() {
           },
           {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
-           "builder=sweep", "cost=default", "width=2,cost=default", "kernel=certified", "kernel=certified,width=4",
-           "kernel=certified,width=2", "optimize=reinsert", "optimize=reinsert,width=2"}};
+           "builder=sweep", "cost=default", "width=2,cost=default", "kernel=watertight", "kernel=watertight,width=4",
+           "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2"}};
 }
 
 namespace {

@@ -35,9 +35,9 @@ class Bvh final : public AggregateBase<Bvh> {
 
   template <class Counters>
   bool intersect_impl(Ray& ray, Hit& hit, Counters& counters) const {
-    const bool found = config_.kernel == KernelChoice::certified ? trace<CertifiedKernel, true, false>(ray, hit, counters)
-                       : config_.robust ? trace<WatertightKernel, true, false>(ray, hit, counters)
-                                        : trace<MollerTrumboreKernel, false, false>(ray, hit, counters);
+    const bool found = !config_.robust ? trace<MollerTrumboreKernel, false, false>(ray, hit, counters)
+                       : config_.kernel == KernelChoice::certified ? trace<CertifiedKernel, true, false>(ray, hit, counters)
+                                                                   : trace<WatertightKernel, true, false>(ray, hit, counters);
     if (found) ray.tmax = hit.t;
     return found;
   }
@@ -45,7 +45,8 @@ class Bvh final : public AggregateBase<Bvh> {
   template <class Counters>
   bool occluded_impl(const Ray& ray, Counters& counters) const {
     Hit hit;
-    if (config_.kernel == KernelChoice::certified) return trace<CertifiedKernel, true, true>(ray, hit, counters);
+    if (config_.robust && config_.kernel == KernelChoice::certified)
+      return trace<CertifiedKernel, true, true>(ray, hit, counters);
     const Ray closed = closed_for_any_hit(ray);
     return config_.robust ? trace<WatertightKernel, true, true>(closed, hit, counters)
                           : trace<MollerTrumboreKernel, false, true>(closed, hit, counters);

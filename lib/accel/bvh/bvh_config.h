@@ -62,11 +62,12 @@ struct BvhConfig {
   /// Optimisation wall time at most, in seconds, checked between passes; 0 gives no limit (a
   /// limit makes the tree depend on the machine's speed).
   double optimize_budget = 0.0;
-  /// Ize's conservative slab test and the watertight triangle kernel; off gives the `fast`
-  /// variant (plain slab test, Moller-Trumbore), held by the oracle suite to its stated bound.
+  /// Ize's conservative slab test and `kernel`; off gives the `fast` variant (plain slab test,
+  /// Moller-Trumbore, whatever `kernel` says), held by the oracle suite to its stated bound.
   bool robust = true;
-  /// The triangle/sphere kernel of the robust traversal; certified requires robust.
-  KernelChoice kernel = KernelChoice::watertight;
+  /// The triangle/sphere kernel of the robust traversal (the spec rejects kernel=certified with
+  /// robust=off, and takes watertight as robust=off's default).
+  KernelChoice kernel = KernelChoice::certified;
   /// Build threads; 0 means every hardware thread.
   int threads = 0;
 };

@@ -48,7 +48,7 @@ std::unique_ptr<Aggregate> make_brute(std::shared_ptr<const Scene> scene, const 
   return std::make_unique<BruteForce<WatertightKernel>>(std::move(scene));
 }
 
-const std::vector<std::string> kKernels = {"watertight", "mt", "exact", "certified"};
+const std::vector<std::string> kKernels = {"certified", "watertight", "mt", "exact"};
 const std::vector<std::string> kQualities = {"low", "medium", "high"};
 
 EmbreeConfig read_embree(SpecReader& r, bool robust) {
@@ -65,14 +65,14 @@ std::vector<AccelKind> make_registry() {
   kinds.push_back(
       {"brute",
        "every ray against every primitive (|Image| x |Objects|)",
-       {{"kernel", "watertight",
-         "ray-triangle kernel: watertight (Woop et al. 2013) | mt (Moller-Trumbore) | exact (CGAL) | certified (float "
-         "with a forward error bound, exact CGAL fallback)"}},
+       {{"kernel", "certified",
+         "ray-triangle kernel: certified (float with a forward error bound, exact CGAL fallback) | watertight (Woop et "
+         "al. 2013) | mt (Moller-Trumbore) | exact (CGAL)"}},
        [](std::shared_ptr<const Scene> scene, SpecReader& r) {
-         return make_brute(std::move(scene), r.get_choice("kernel", "watertight", kKernels));
+         return make_brute(std::move(scene), r.get_choice("kernel", "certified", kKernels));
        },
        [](SpecReader& r) -> AccuracyBound {
-         const std::string k = r.get_choice("kernel", "watertight", kKernels);
+         const std::string k = r.get_choice("kernel", "certified", kKernels);
          if (k == "mt")
            return float_accuracy(0.5, 1e-3,
                                  "Moller-Trumbore is not watertight: crossing rays through shared edges and vertices "
@@ -82,7 +82,7 @@ std::vector<AccelKind> make_registry() {
          if (k == "certified") return exact_accuracy("certified kernel");
          return watertight_accuracy("watertight kernel");
        },
-       {"kernel=mt", "kernel=exact", "kernel=certified"}});
+       {"kernel=mt", "kernel=exact", "kernel=watertight"}});
   kinds.push_back({"exact",
                    "the exact oracle: CGAL AABB-tree candidates, exact predicates, exact first-hit order",
                    {},
@@ -129,8 +129,8 @@ std::vector<AccelKind> make_registry() {
          return scene->instanced() ? make_instanced_for_kernel(c.kernel, *scene, make) : make(std::move(scene));
        },
        [](SpecReader& r) { return grid_accuracy(read_grid_config(r)); },
-       {"place=exact", "place=bbox", "mailbox=off", "accept=first", "d=0.5", "d=8", "kernel=certified",
-        "kernel=certified,place=exact,mailbox=off", "kernel=certified,place=bbox"}});
+       {"place=exact", "place=bbox", "mailbox=off", "accept=first", "d=0.5", "d=8", "kernel=watertight",
+        "kernel=watertight,place=exact,mailbox=off", "kernel=watertight,place=bbox"}});
   kinds.push_back(
       {"nested-grid",
        "grids in crowded cells (the lecture's nested grid) or the two-level grid of Kalojanov et al. 2011",
@@ -144,7 +144,7 @@ std::vector<AccelKind> make_registry() {
        },
        [](SpecReader& r) { return grid_accuracy(read_nested_grid_config(r).cells); },
        {"mode=two-level", "place=exact", "place=bbox", "mailbox=off", "accept=first", "threshold=4,depth=3",
-        "kernel=certified"}});
+        "kernel=watertight"}});
   return kinds;
 }
 

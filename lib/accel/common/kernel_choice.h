@@ -1,11 +1,14 @@
 #pragma once
-/// The `kernel=watertight|certified` parameter of every accelerator that tests triangles or
+/// The `kernel=certified|watertight` parameter of every accelerator that tests triangles or
 /// spheres (brute has its own, which also offers mt and exact).
 ///
-///  - watertight: WatertightKernel (Woop, Benthin and Wald 2013), float, the default.
 ///  - certified:  CertifiedKernel (geometry/certified_kernel.h): the float test with a forward
 ///                error bound and an exact fallback, whose first hits equal the exact oracle's;
-///                traversal is then run conservatively (each accelerator states how).
+///                traversal is then run conservatively (each accelerator states how). The
+///                default wherever the accelerator's other parameters allow it.
+///  - watertight: WatertightKernel (Woop, Benthin and Wald 2013), float: the default only where
+///                another parameter rules the certified kernel out (`bvh:robust=off`,
+///                `grid:accept=first`).
 #include <string>
 #include <vector>
 
@@ -16,15 +19,22 @@ namespace raylab {
 
 enum class KernelChoice { watertight, certified };
 
-inline ParamDoc kernel_param_doc() {
-  return {"kernel", "watertight",
-          "watertight (Woop et al. 2013, float) | certified (float with a forward error bound and an exact CGAL "
-          "fallback: the exact oracle's first hits)"};
+/// `default_doc` is the default as listed: "certified", or a rule where another parameter decides.
+inline ParamDoc kernel_param_doc(std::string default_doc = "certified") {
+  return {"kernel", std::move(default_doc),
+          "certified (float with a forward error bound and an exact CGAL fallback: the exact oracle's first hits) | "
+          "watertight (Woop et al. 2013, float)"};
 }
 
-inline KernelChoice read_kernel_choice(SpecReader& r) {
-  return r.get_choice("kernel", "watertight", {"watertight", "certified"}) == "certified" ? KernelChoice::certified
-                                                                                         : KernelChoice::watertight;
+inline const char* kernel_choice_name(KernelChoice k) {
+  return k == KernelChoice::certified ? "certified" : "watertight";
+}
+
+/// `kernel=`, or `fallback` when the spec does not set it.
+inline KernelChoice read_kernel_choice(SpecReader& r, KernelChoice fallback = KernelChoice::certified) {
+  return r.get_choice("kernel", kernel_choice_name(fallback), {"certified", "watertight"}) == "certified"
+             ? KernelChoice::certified
+             : KernelChoice::watertight;
 }
 
 /// The closest-hit bound a traversal starts from: tmax, raised for the certified kernel as its

@@ -37,8 +37,10 @@ struct GridConfig {
   bool mailbox = true;
   /// Cap on nx·ny·nz; the density is lowered uniformly to meet it (default 2^27 cells, 512 MiB of offsets).
   std::int64_t max_cells = std::int64_t(1) << 27;
-  /// certified requires in-cell acceptance (grid_spec.cpp).
-  KernelChoice kernel = KernelChoice::watertight;
+  /// The certified path needs no acceptance test (cell_intersector.h), so `acceptance` matters
+  /// only to the watertight one; the spec rejects kernel=certified with accept=first and takes
+  /// watertight as accept=first's default (grid_spec.cpp).
+  KernelChoice kernel = KernelChoice::certified;
 };
 
 /// The lecture's resolution heuristic for `n` objects in `box`: the largest axis gets

@@ -13,7 +13,7 @@ std::vector<ParamDoc> grid_cell_params() {
       {"accept", "in-cell", "in-cell (hit must lie in the cell's t-interval) | first (the lecture's mistake)"},
       {"mailbox", "on", "per-ray mailbox: on | off"},
       {"max_cells", "134217728", "cap on the cells of one grid (d is lowered to meet it), in [1, 2^30]"},
-      kernel_param_doc(),
+      kernel_param_doc("certified (accept=in-cell), watertight (accept=first)"),
   };
 }
 
@@ -26,7 +26,8 @@ GridConfig read_grid_config(SpecReader& r) {
       r.get_choice("accept", "in-cell", {"in-cell", "first"}) == "first" ? GridAcceptance::first : GridAcceptance::in_cell;
   c.mailbox = r.get_bool("mailbox", true);
   c.max_cells = r.get_int("max_cells", std::int64_t(1) << 27, 1, std::int64_t(1) << 30);
-  c.kernel = read_kernel_choice(r);
+  c.kernel = read_kernel_choice(
+      r, c.acceptance == GridAcceptance::first ? KernelChoice::watertight : KernelChoice::certified);
   if (c.kernel == KernelChoice::certified && c.acceptance == GridAcceptance::first)
     throw InputError("accelerator '" + r.spec().text + "': kernel=certified needs in-cell acceptance (accept=in-cell)");
   return c;

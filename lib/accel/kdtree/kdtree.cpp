@@ -87,8 +87,8 @@ AccelKind make_kdtree_kind() {
             return kernel_accuracy(read_kdtree_config(r).kernel, "conservative placement and traversal");
           },
           {"builder=midpoint,traversal=recursive", "builder=median,clip=bbox,mailbox=on", "sweep=sort,clip=none",
-           "clip=bbox,traversal=recursive,mailbox=on", "cost=default", "kernel=certified",
-           "kernel=certified,traversal=recursive,clip=bbox,mailbox=on"}};
+           "clip=bbox,traversal=recursive,mailbox=on", "cost=default", "kernel=watertight",
+           "kernel=watertight,traversal=recursive,clip=bbox,mailbox=on"}};
 }
 
 namespace {

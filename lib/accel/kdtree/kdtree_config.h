@@ -51,7 +51,7 @@ struct KdTreeConfig {
   int leaf_size = 4;
   /// Remember the last primitives tested by a ray and skip repeats (Amanatides and Woo 1987).
   bool mailbox = false;
-  KernelChoice kernel = KernelChoice::watertight;
+  KernelChoice kernel = KernelChoice::certified;
 };
 
 /// The depth limit actually used for `n` primitives.

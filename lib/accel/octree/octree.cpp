@@ -68,8 +68,8 @@ AccelKind make_octree_kind() {
             return kernel_accuracy(read_octree_config(r).kernel, "conservative placement and traversal");
           },
           {"clip=none", "clip=bbox,mailbox=on,c_trav=1", "traversal=revelles,c_trav=8", "traversal=kd,c_trav=8",
-           "clip=none,traversal=kd,mailbox=on", "cost=default", "kernel=certified,c_trav=4",
-           "kernel=certified,traversal=kd,clip=bbox,mailbox=on"}};
+           "clip=none,traversal=kd,mailbox=on", "cost=default", "kernel=watertight,c_trav=4",
+           "kernel=watertight,traversal=kd,clip=bbox,mailbox=on"}};
 }
 
 namespace {

@@ -29,7 +29,7 @@ struct OctreeConfig {
   /// Remember the last primitives tested by a ray and skip repeats.
   bool mailbox = false;
   OctreeTraversal traversal = OctreeTraversal::stack;
-  KernelChoice kernel = KernelChoice::watertight;
+  KernelChoice kernel = KernelChoice::certified;
 };
 
 int octree_max_depth(const OctreeConfig& config, std::size_t n);
