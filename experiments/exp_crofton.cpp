@@ -70,7 +70,7 @@ std::shared_ptr<Scene> mesh_scene(const std::string& name, const TriangleMesh& m
   return s;
 }
 
-/// The fraction of `lines` that hit `scene` (closest-hit queries with the watertight BVH), and
+/// The fraction of `lines` that hit `scene` (closest-hit queries with the default BVH, certified), and
 /// its binomial standard error.
 std::pair<double, double> hit_fraction(const std::shared_ptr<const Scene>& scene, const std::vector<Ray>& lines) {
   const auto accel = make_accelerator("bvh", scene);
@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
         "polytopes; the projected area in each of {} uniform random directions is the area of the planar convex hull "
         "(`CGAL::convex_hull_2`) of the projected hull vertices, exact up to double rounding. (2) The same demo "
         "meshes, not convex: their true mean silhouette area, measured as π r²·P(hit) with {} isotropic random lines "
-        "through the ball of radius r around each mesh (traced with `bvh`, watertight). (3) Pairs of convex bodies, one "
+        "through the ball of radius r around each mesh (traced with `bvh`, the default: certified kernel, exact first hits). (3) Pairs of convex bodies, one "
         "inside the other: the fraction of {} isotropic lines meeting the outer that also meet the inner. Every ± is "
         "one standard error of the sampling. Command: `build/experiments/exp_crofton --mode {}`.\n\n",
         meshes.size(), std::size(polytopes), directions, line_count, line_count, opt.mode);

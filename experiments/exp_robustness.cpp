@@ -1,6 +1,7 @@
 // Robustness (issues 6 and 15): where methods fail. Runs every
-// accelerator the factory knows (with its listed variants: the watertight, Möller-Trumbore,
-// exact and certified kernels through brute, kernel=certified on every structure, Embree and
+// accelerator the factory knows (its default, the certified kernel wherever a kernel is chosen,
+// and its listed variants: the watertight, Möller-Trumbore and exact kernels through brute,
+// kernel=watertight on every structure, Embree and
 // Embree's robust mode) against the exact oracle on the adversarial cases of
 // tests/test_adversarial_cases.h (the same cases the adversarial test suite holds each method
 // to), plus shared edges, vertices, touching and grazing rays of every closed CGAL demo mesh, and
@@ -165,7 +166,7 @@ int main(int argc, char** argv) {
           "mesh" + std::string(opt.full() ? "" : fmt::format(" up to {} triangles (quick mode; full mode runs all)", kQuickMaxTriangles)) + ", and on a closed mesh (`" + kTransformedMesh(opt.full()) + "`" + std::string(opt.full() ? "" : "; full mode: `cgal:elephant`") + ") moved far from the origin, shrunk and grown (`transformed:`). Each cell: "
           "closest-hit mismatches as false hits / missed hits / wrong first hits. Float methods are judged by the "
           "tolerance of `raylab trace --check` (t within 1e-4 of the scene's scale; a hit on another triangle there is a "
-          "tie); methods stated exact (`exact`, `brute:kernel=exact`, every `kernel=certified`) by the exact rule: the "
+          "tie); methods stated exact (`exact`, `brute:kernel=exact`, and every accelerator's default, the certified kernel) by the exact rule: the "
           "same primitive, or one whose exact t equals the oracle's.\n\n";
     md += "| case | rays |";
     for (const auto& s : specs) md += " `" + s + "` |";

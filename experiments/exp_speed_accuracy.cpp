@@ -6,10 +6,10 @@
 // rays, and rays on the scene moved far from the origin and shrunk. Errors are also counted per
 // class (crossing, touching, grazing, on-surface, far).
 //
-// Methods: every accelerator the factory knows with its default parameters and every listed
-// variant (the brute-force kernels mt, watertight and exact; Embree and its robust mode; the BVH's
-// robust=off; ...), and for every accelerator kind `NAME:kernel=certified` when the factory
-// accepts it (a method that does not exist yet is skipped, so the chart covers it once it does).
+// Methods: every accelerator the factory knows with its default parameters (the certified kernel
+// wherever a kernel is chosen) and every listed variant (the brute-force kernels watertight, mt and
+// exact; `kernel=watertight` on every structure; Embree and its robust mode; the BVH's robust=off;
+// ...).
 // Writes speed_accuracy.csv and speed_accuracy.md.
 #include <fmt/format.h>
 
@@ -30,23 +30,12 @@ using namespace raylab::experiments;
 
 namespace {
 
-/// Every method of the chart, named as the tool names it: each kind's defaults and listed variants,
-/// then `NAME:kernel=certified` for each kind whose factory accepts it on `scene`.
-std::vector<std::string> methods(const std::shared_ptr<const Scene>& scene) {
+/// Every method of the chart, named as the tool names it: each kind's defaults and listed variants.
+std::vector<std::string> methods() {
   std::vector<std::string> specs;
   for (const auto& kind : accelerator_kinds()) {
     specs.push_back(kind.name);
     for (const auto& v : kind.oracle_variants) specs.push_back(kind.name + ":" + v);
-  }
-  for (const auto& kind : accelerator_kinds()) {
-    const std::string certified = kind.name + ":kernel=certified";
-    if (std::find(specs.begin(), specs.end(), certified) != specs.end()) continue;
-    try {
-      make_accelerator(certified, scene);
-      specs.push_back(certified);
-    } catch (const InputError&) {
-      // the kind has no certified kernel (yet)
-    }
   }
   return specs;
 }
@@ -242,7 +231,7 @@ int main(int argc, char** argv) {
       }
       for (const auto& r : sets) adversarial_rays[fam.name] += r.rays.size();
       const auto embree = make_accelerator("embree", scene);
-      for (const auto& m : methods(scene)) {
+      for (const auto& m : methods()) {
         if (std::find(all_methods.begin(), all_methods.end(), m) == all_methods.end()) all_methods.push_back(m);
         progress("speed_accuracy: " + fam.spec + " " + m);
         const AccuracyBound bound = accuracy_bound(m);
@@ -305,8 +294,8 @@ int main(int argc, char** argv) {
         "exactly at edges (`edges:`) and vertices (`vertices:`), touching rays (`touching:`) and grazing rays "
         "(`grazing:`), and {} each of lines, edge- and vertex-aimed rays on the scene moved far from the origin "
         "(`transformed:of=(SCENE),{}`) and shrunk (`transformed:of=(SCENE),{}`). Methods: every "
-        "accelerator with its defaults and each variant the factory lists (`raylab accels`), and "
-        "`NAME:kernel=certified` for every accelerator that accepts it. Command: "
+        "accelerator with its defaults (the certified kernel, wherever a kernel is chosen) and each variant the "
+        "factory lists (`raylab accels`; `kernel=watertight` among them for every structure). Command: "
         "`build/experiments/exp_speed_accuracy --mode {}`.\n\n",
         ordinary_kinds.front().substr(ordinary_kinds.front().find(':') + 1), kMinRounds, count, far_count,
         kFarScenes[0].transform, kFarScenes[1].transform, opt.mode);

@@ -56,7 +56,9 @@ def kernel_of(method: str) -> str:
         return values["kernel"]
     if values.get("robust") == "off":
         return "mt"  # the BVH's fast variant: plain slab test and Moller-Trumbore
-    return "watertight"
+    if values.get("accept") == "first":
+        return "watertight"  # the grids' accept=first rules the certified kernel out
+    return "certified"
 
 
 def pareto_front(throughput, errors):
