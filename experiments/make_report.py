@@ -233,6 +233,38 @@ def machine_info() -> dict:
             "compiler": compiler(), "libraries": library_versions()}
 
 
+def default_kernel_line(out: pathlib.Path) -> str:
+    """What the default kernel guarantees and what it cost in this run, from exp_certainty's CSVs
+    (certainty.csv: the BVH's paths and Embree on the same rays; certainty_structures.csv: every
+    structure's certified over watertight time); empty when the run has neither."""
+    text = ("**Defaults**: every accelerator traces with the certified kernel unless its spec names another: its "
+            "first hit is the exact oracle's on every ray (touching, grazing, edge- and vertex-aimed rays "
+            "included), held to 0 mismatches by the oracle suite.")
+    structures, paths = out / "certainty_structures.csv", out / "certainty.csv"
+    if structures.exists():
+        with open(structures) as f:
+            ratios = [float(r["ratio_median"]) for r in csv.DictReader(f)]
+        if ratios:
+            within = sum(r <= 1.10 for r in ratios)
+            text += (f" In this run it cost {min(ratios):.2f}–{max(ratios):.2f}× the watertight kernel's time over "
+                     f"every structure and ray kind ({within} of {len(ratios)} rows ≤ 1.10; "
+                     "[certainty](certainty.md)).")
+    if paths.exists():
+        ns = {}
+        with open(paths) as f:
+            for r in csv.DictReader(f):
+                if r["rays"] in ("primary", "diffuse", "shadow"):
+                    ns[(r["scene"], r["rays"], r["accel"])] = float(r["ns_per_ray"])
+        vs_fast = [ns[(s, k, "embree")] / v for (s, k, a), v in ns.items() if a == "bvh" and (s, k, "embree") in ns]
+        vs_robust = [ns[(s, k, "embree-robust")] / v for (s, k, a), v in ns.items()
+                     if a == "bvh" and (s, k, "embree-robust") in ns]
+        if vs_fast and vs_robust:
+            text += (f" The default `bvh` reached {min(vs_fast):.2f}–{max(vs_fast):.2f} of Embree's throughput and "
+                     f"{min(vs_robust):.2f}–{max(vs_robust):.2f} of Embree robust's (primary, diffuse and shadow "
+                     "rays, single thread).")
+    return text
+
+
 def machine_line(m: dict, revision: str) -> str:
     caches = ", ".join(f"{k} {v}" for k, v in m["caches"].items()) or "cache sizes unknown"
     libs = ", ".join(f"{k} {v}" for k, v in m["libraries"].items())
@@ -366,7 +398,7 @@ def main() -> int:
             "with full citations and the threshold each verdict is decided by, is in [docs/theory.md](../theory.md). "
             "The same verdicts, key numbers, intervals and specs are in [results.json](results.json); "
             "`experiments/compare_results.py A.json B.json` compares two of them.", "",
-            machine_line(machine, revision), ""]
+            machine_line(machine, revision), "", default_kernel_line(out), ""]
     page += summary_table(verdicts, anchors)
     page += changes_section(previous, results)
     for n in names:
