@@ -24,6 +24,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/model_file.h"
 #include "scene/scene_spec.h"
 #include "bench_env.h"
 
@@ -70,7 +71,7 @@ double pass_seconds(const Aggregate& accel, const std::vector<Ray>& rays) {
 double seconds_to_build(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene) {
   timespec start{}, end{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &start);
-  auto accel = make_accelerator(accel_spec, scene);
+  auto accel = make_accelerator(accel_spec, scene, model_build_context());
   benchmark::DoNotOptimize(accel.get());
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &end);
   return static_cast<double>(end.tv_sec - start.tv_sec) + 1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec);
@@ -101,9 +102,9 @@ void BM_KdTrace(benchmark::State& state, const std::string& scene_spec, const st
   const auto scene = scene_for(scene_spec);
   const auto rays = make_ray_set(ray_spec, scene);
   const auto embree = make_accelerator("embree", scene);
-  const auto accel = make_accelerator(kd_spec(), scene);
+  const auto accel = make_accelerator(kd_spec(), scene, model_build_context());
   const std::string base_spec = kd_base_spec();
-  const auto base = base_spec.empty() ? nullptr : make_accelerator(base_spec, scene);
+  const auto base = base_spec.empty() ? nullptr : make_accelerator(base_spec, scene, model_build_context());
   double best = 1e300, embree_s = 1e300, base_s = 1e300;
   for (auto _ : state) {
     best = std::min(best, pass_seconds(*accel, rays));

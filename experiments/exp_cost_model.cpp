@@ -317,7 +317,7 @@ class CostModelExperiment {
                     const std::map<std::string, std::vector<Ray>>& rays) {
     for (const auto& [family, base] : std::vector<std::pair<std::string, std::string>>{{"kdtree", "kdtree"}, {"bvh8", "bvh"}}) {
       if (!set_.families.count(family)) continue;
-      const auto fitted = make_accelerator(base + ":cost=" + model_path_, sc);
+      const auto fitted = make_accelerator(base + ":cost=" + model_path_, sc, model_build_context());
       const auto r80 = make_accelerator(base + ":c_trav=1,c_isect=80", sc);
       const auto r15 = make_accelerator(base + ":c_trav=1,c_isect=1.5", sc);
       for (const std::string& kind : kRayKinds) {

@@ -25,6 +25,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/exact/contact_classes.h"
 #include "contact_columns.h"
+#include "cost/model_file.h"
 #include "cost/replicates.h"
 #include "experiment_common.h"
 
@@ -115,7 +116,7 @@ int main(int argc, char** argv) {
       const std::vector<RayContact> classes = classify_contacts(c.scene, c.rays);
       const double diagonal = length(Vec3d(c.scene->bounds().diagonal()));
       for (const auto& spec : specs) {
-        const auto accel = make_accelerator(spec, c.scene);
+        const auto accel = make_accelerator(spec, c.scene, model_build_context());
         const TraceResult got = trace_rays(*accel, c.rays, TraceOptions{0, false, false});
         const TraceResult got_occ = trace_rays(*accel, c.rays, TraceOptions{0, false, true});
         const AccuracyBound bound = accuracy_bound(spec);
@@ -269,7 +270,7 @@ int main(int argc, char** argv) {
             "| rounds | hits on invalid rays |\n|---|---|---|---|---|---|---|---|\n";
       for (const auto& spec : specs) {
         if (spec.rfind("brute", 0) == 0) continue;  // |rays| x |triangles|: too slow to time here
-        const auto accel = make_accelerator(spec, scene);
+        const auto accel = make_accelerator(spec, scene, model_build_context());
         const auto trace = [&accel](const std::vector<Ray>* rays) {
           return [&accel, rays] {
             return trace_rays(*accel, *rays, TraceOptions{1, false, false}).thread_cpu_seconds /
@@ -315,7 +316,7 @@ int main(int argc, char** argv) {
         std::size_t bytes = 0;
         for (int r = 0; r < kMemoryBuildRounds; ++r) {
           std::unique_ptr<Aggregate> accel;
-          build_s.push_back(seconds_of([&] { accel = make_accelerator(spec, scene); }));
+          build_s.push_back(seconds_of([&] { accel = make_accelerator(spec, scene, model_build_context()); }));
           bytes = accel->stats().bytes;
         }
         const IntervalEstimate build = bootstrap_median(build_s);

@@ -22,6 +22,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
+#include "cost/model_file.h"
 #include "experiment_common.h"
 #include "scene/scene_spec.h"
 
@@ -240,7 +241,7 @@ int main(int argc, char** argv) {
         std::vector<Tally> tallies;
         for (const auto& r : sets) {
           auto& accel = built[r.scene.get()];
-          if (!accel) accel = make_accelerator(m, r.scene);
+          if (!accel) accel = make_accelerator(m, r.scene, model_build_context());
           const std::vector<Hit> got = trace_rays(*accel, r.rays, TraceOptions{0, false, false}).hits;  // not timed
           const HitComparison h = compare_by_rule(bound, *r.scene, r.rays, got, r.reference, r.diagonal, &r.classes);
           Tally t{h.rays, h.mismatches, h.false_hits, h.missed_hits, h.wrong_t, h.ties, {}, {},

@@ -19,6 +19,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/common/tracer.h"
 #include "accel/exact/contact_classes.h"
+#include "cost/model_file.h"
 #include "test_adversarial_cases.h"
 
 namespace raylab {
@@ -61,7 +62,7 @@ Reference& cached_reference(const Case& c) {
 
 /// Checks one accelerator on one case, closest hit and any hit, against its stated bound.
 void expect_within_bound(const std::string& accel_spec, const Case& c, Reference& ref) {
-  const auto accel = make_accelerator(accel_spec, c.scene);
+  const auto accel = make_accelerator(accel_spec, c.scene, model_build_context());
   const AccuracyBound bound = accuracy_bound(accel_spec);
   const double diagonal = length(Vec3d(c.scene->bounds().diagonal()));
   const TraceResult got = trace_rays(*accel, c.rays, TraceOptions{0, false, false});
@@ -152,7 +153,7 @@ TEST(AdversarialNonFinite, InvalidRaysNeverHit) {
   for (const auto& scene : scenes) {
     const auto oracle = make_accelerator("exact", scene);
     for (const auto& spec : all_accel_specs()) {
-      const auto accel = make_accelerator(spec, scene);
+      const auto accel = make_accelerator(spec, scene, model_build_context());
       for (std::size_t i = 0; i < rays.size(); ++i) {
         Ray r = rays[i];
         Hit h;

@@ -108,6 +108,16 @@ TEST(CostCli, BadInputGivesOneErrorLineAndNoOutputFile) {
   }
 }
 
+// cost= on a scene outside the family's fitted range of primitives builds with the fitted constants
+// and warns once on stderr, naming the feature and the factor (the model's own range check).
+TEST(CostCli, CostOutsideTheFittedRangeWarnsOnceAndBuilds) {
+  const ToolRun r = run_tool("trace --scene sphere:n=200 --accel kdtree:cost=default --rays primary:100 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("cost=default: kdtree primitives 224 is"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("below the fitted"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("cost=default", r.err.find("cost=default") + 1), std::string::npos) << "warned twice: " << r.err;
+}
+
 TEST(CostCli, ExistingOutputWithoutResumeIsRefusedAndKept) {
   const std::string plan = write_file("plan_keep.json", kSmallPlan);
   const std::string out = write_file("keep.csv", "not a runs file\n");

@@ -624,7 +624,8 @@ TEST(CostModelFile, BuildersTakeTheFittedConstants) {
   const auto scene = make_scene("sphere:n=2000");
   const FittedSahCost c = load_builder_costs(path, "kdtree");
   // cost=model builds the tree the same constants give by hand (C_leaf is 0: the data had no leaf cost).
-  const auto fitted = make_accelerator("kdtree:cost=" + path, scene);
+  const BuildContext context = model_build_context();
+  const auto fitted = make_accelerator("kdtree:cost=" + path, scene, context);
   char manual[128];
   std::snprintf(manual, sizeof manual, "kdtree:c_trav=%.17g,c_isect=%.17g", c.c_trav, c.c_isect);
   ASSERT_EQ(c.c_leaf, 0.0);
@@ -632,13 +633,18 @@ TEST(CostModelFile, BuildersTakeTheFittedConstants) {
   // A ratio of 1:20 builds a deeper tree than the default 1:1.5.
   EXPECT_GT(fitted->stats().nodes, make_accelerator("kdtree", scene)->stats().nodes);
   for (const char* spec : {"bvh:cost=", "octree:cost=", "bsp:cost="}) {
-    const auto a = make_accelerator(spec + path, scene);
+    const auto a = make_accelerator(spec + path, scene, context);
     EXPECT_GT(a->stats().nodes, 0u) << spec;
   }
-  EXPECT_THROW(make_accelerator("kdtree:cost=" + path + ",c_trav=2", scene), InputError);
-  EXPECT_THROW(make_accelerator("nested-grid:cost=" + path, scene), InputError);   // no such parameter
-  EXPECT_THROW(make_accelerator("bvh:width=2,cost=" + path, scene), InputError);   // no bvh (width 2) entry
-  EXPECT_THROW(make_accelerator("kdtree:cost=/no/such.json", scene), InputError);
+  EXPECT_THROW(make_accelerator("kdtree:cost=" + path + ",c_trav=2", scene, context), InputError);
+  EXPECT_THROW(make_accelerator("nested-grid:cost=" + path, scene, context), InputError);   // no such parameter
+  EXPECT_THROW(make_accelerator("bvh:width=2,cost=" + path, scene, context), InputError);   // no bvh (width 2) entry
+  EXPECT_THROW(make_accelerator("kdtree:cost=/no/such.json", scene, context), InputError);
+  // lib/accel reads no model: without a context that resolves cost=, the spec is an input error,
+  // and reading a spec with cost= (its accuracy, its canonical form) reads no file.
+  EXPECT_THROW(make_accelerator("kdtree:cost=" + path, scene), InputError);
+  EXPECT_NO_THROW(accuracy_bound("kdtree:cost=/no/such.json"));
+  EXPECT_NO_THROW(canonical_spec("bvh:cost=/no/such.json"));
 }
 
 TEST(AutoAccelerator, ChoosesAStructureThatAgreesWithTheOracle) {

@@ -13,6 +13,7 @@
 #include "test_adversarial_cases.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/model_file.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -26,7 +27,7 @@ const std::vector<std::string> kScenes = {"soup:n=1000", "sphereflake:depth=1,as
 std::unique_ptr<Aggregate> build_in_arena(const std::string& spec, const std::shared_ptr<const Scene>& scene, int threads) {
   tbb::task_arena arena(threads);
   std::unique_ptr<Aggregate> accel;
-  arena.execute([&] { accel = make_accelerator(spec, scene); });
+  arena.execute([&] { accel = make_accelerator(spec, scene, model_build_context()); });
   return accel;
 }
 

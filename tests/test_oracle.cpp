@@ -21,6 +21,7 @@
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
 #include "accel/exact/contact_classes.h"
+#include "cost/model_file.h"
 #include "gltf_writer.h"
 #include "scene/scene_spec.h"
 
@@ -158,7 +159,7 @@ class OracleSuite : public ::testing::TestWithParam<OracleParam> {};
 TEST_P(OracleSuite, AgreesWithTheExactOracleWithinItsStatedBound) {
   const auto& [accel_spec, scene_spec] = GetParam();
   const auto scene = scene_for(scene_spec);
-  const auto accel = make_accelerator(accel_spec, scene);
+  const auto accel = make_accelerator(accel_spec, scene, model_build_context());
   const AccuracyBound bound = accuracy_bound(accel_spec);
   const double diagonal = length(Vec3d(scene->bounds().diagonal()));
   for (const auto& ray_spec : kRaySpecs) {

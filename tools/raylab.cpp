@@ -30,6 +30,7 @@
 #include "accel/common/tracer.h"
 #include "accel/exact/contact_classes.h"
 #include "cost/auto_accel.h"
+#include "cost/model_file.h"
 #include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/camera.h"
@@ -256,7 +257,8 @@ int run_trace(const TraceCommand& o) {
   std::string accel_spec = o.accel;
   if (const SpecString s = parse_spec(o.accel); s.name == "auto" && !SpecReader(s).has("count"))
     accel_spec += (s.params.empty() && s.positional.empty() ? ":count=" : ",count=") + std::to_string(rays.size());
-  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(accel_spec, scene); }, &build_s);
+  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(accel_spec, scene, model_build_context()); },
+                          &build_s);
   TraceOptions topt{o.threads, false, any_hit};
   const TraceResult timed = timed_step("tracing", [&] { return trace_rays(*accel, rays, topt); });
   RayCounters counters;
@@ -350,7 +352,7 @@ int run_trace(const TraceCommand& o) {
   if (!o.check.empty()) {
     double check_s = 0;
     auto reference = timed_step("building the " + o.check + " reference",
-                                [&] { return make_accelerator(o.check, scene); });
+                                [&] { return make_accelerator(o.check, scene, model_build_context()); });
     const TraceResult ref = timed_step("tracing the " + o.check + " reference",
                                        [&] { return trace_rays(*reference, rays, TraceOptions{o.threads, false, any_hit}); },
                                        &check_s);
@@ -417,7 +419,7 @@ int run_render(const RenderCommand& o) {
   if (o.out.size() < 5 || o.out.substr(o.out.size() - 4) != ".png") throw InputError("--out " + o.out + ": expected a .png path");
   if (o.log_scale && !o.heatmap) throw InputError("--log: a log colour scale needs --heatmap");
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
-  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene); });
+  auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene, model_build_context()); });
   const Camera camera = placed_camera(parse_camera_placement(o.camera), scene->bounds());
   const std::vector<Ray> rays = image_rays(camera, o.width, o.height);
   std::vector<float> values(rays.size());

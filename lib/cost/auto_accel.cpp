@@ -118,7 +118,7 @@ std::unique_ptr<Aggregate> choose_built_all(const std::shared_ptr<const Scene>& 
     }
     std::unique_ptr<Aggregate> accel;
     try {
-      accel = make_accelerator(spec, scene);
+      accel = make_accelerator(spec, scene, model_build_context());  // candidates' cost=MODEL: auto's model
     } catch (const InputError& e) {  // e.g. a model whose constants a builder cannot use
       c.skipped = e.what();
       choice.candidates.push_back(c);
@@ -221,7 +221,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
     AutoCandidate& c = candidates[k];
     const auto t = Clock::now();
     try {
-      auto accel = make_accelerator(c.spec, scene);
+      auto accel = make_accelerator(c.spec, scene, model_build_context());
       c.measured_build_s = seconds_since(t);
       c.built = true;
       ++choice.candidates_built;
@@ -343,7 +343,8 @@ AccelKind make_auto_kind() {
   return {"auto",
           "the structure a fitted cost model predicts fastest for the scene (raylab fit; see docs/cost_model.md)",
           auto_params(),
-          [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_auto(std::move(scene), r); },
+          // auto reads its model itself (lib/cost), so it needs nothing from the context.
+          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext&) { return make_auto(std::move(scene), r); },
           [](SpecReader& r) -> AccuracyBound {
             // The loosest bound of the candidates: every one of them may be chosen.
             r.get_choice("rays", "mixed", kRayKinds);

@@ -6,11 +6,13 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "cost/output_file.h"
 #include "cost/provenance.h"
 #include "geometry/input_error.h"
+#include "geometry/input_warning.h"
 
 namespace raylab {
 namespace {
@@ -342,9 +344,25 @@ FittedSahCost load_builder_costs(const std::string& path, const std::string& fam
   return m.builder;
 }
 
-namespace {
-/// lib/accel reads `cost=` through this loader (fitted_cost.h).
-const bool kLoaderRegistered = (set_fitted_cost_loader(&load_builder_costs), true);
-}  // namespace
+BuildContext model_build_context() {
+  BuildContext context;
+  context.fitted_costs = [](const FittedCostRequest& request, double primitives) {
+    const FittedSahCost costs = load_builder_costs(request.model, request.family);
+    const std::shared_ptr<const CostModelSet> set = load_model_file(request.model);
+    const FamilyModel& m = set->family(request.family);
+    if (const auto range = m.ranges.find("primitives"); range != m.ranges.end()) {
+      const FeatureRangeCheck check = check_feature_range("primitives", primitives, range->second);
+      // Once per model file and family in a process: a sweep builds many structures.
+      static std::mutex mutex;
+      static std::set<std::string> warned;
+      std::lock_guard lock(mutex);
+      if (check.outside() && warned.insert(resolve_model_path(request.model) + "|" + request.family).second)
+        warn_input("cost=" + request.model + ": " + request.family + " " + check.describe() +
+                   "; its constants are used as they are");
+    }
+    return costs;
+  };
+  return context;
+}
 
 }  // namespace raylab

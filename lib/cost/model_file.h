@@ -38,9 +38,14 @@ std::string default_model_path();
 /// `path`, with `default` resolved to default_model_path().
 std::string resolve_model_path(const std::string& path);
 
-/// The SAH constants for `family` from the model at `path` (the loader lib/cost registers for
-/// the builders' `cost=`); throws InputError when the family is missing or its constants are not
-/// positive. The file is read by load_model_file.
+/// The SAH constants for `family` from the model at `path`; throws InputError when the family is
+/// missing or its constants are not positive. The file is read by load_model_file.
 FittedSahCost load_builder_costs(const std::string& path, const std::string& family);
+
+/// The build context that resolves the builders' `cost=MODEL` (fitted_cost.h) with
+/// load_builder_costs, for the tool, the sweeps, `auto` and the experiments to hand to
+/// make_accelerator. A scene outside the family's fitted range of primitives gets one warning
+/// on stderr per model and family (the model's own range check, model_fit.h), and the constants.
+BuildContext model_build_context();
 
 }  // namespace raylab

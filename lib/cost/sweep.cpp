@@ -15,6 +15,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/model_file.h"
 #include "cost/provenance.h"
 #include "cost/run_record.h"
 #include "geometry/input_error.h"
@@ -356,7 +357,7 @@ BuiltStructure build_structure(const std::string& accel_spec, const std::shared_
   BuiltStructure b;
   tbb::task_arena arena(resolve_thread_count(threads));
   const auto start = std::chrono::steady_clock::now();
-  arena.execute([&] { b.accel = make_accelerator(accel_spec, scene); });
+  arena.execute([&] { b.accel = make_accelerator(accel_spec, scene, model_build_context()); });
   b.build_s = seconds_since(start);
   b.features = tree_features(*b.accel, *scene);
   return b;

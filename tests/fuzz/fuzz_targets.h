@@ -25,6 +25,7 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/tracer.h"
+#include "cost/model_file.h"
 #include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/ray_file.h"
@@ -265,7 +266,7 @@ inline int build_and_trace(const std::uint8_t* data, std::size_t size) {
   for (const auto& spec : specs) {
     std::unique_ptr<Aggregate> accel;
     try {
-      accel = make_accelerator(spec, scene);
+      accel = make_accelerator(spec, scene, model_build_context());
     } catch (const InputError&) {
       continue;  // e.g. an accelerator that refuses a scene; a clear error is fine
     }

@@ -25,7 +25,7 @@ std::optional<std::uint64_t> BspTree::structure_hash() const {
 
 BspConfig read_bsp_config(SpecReader& r) {
   BspConfig c;
-  read_sah_constants(r, "bsp", 1.0, kKdDefaultIsect, c.cost);
+  c.fitted_cost = read_sah_constants(r, "bsp", 1.0, kKdDefaultIsect, c.cost);
   c.cost.empty_bonus = r.get_double("empty_bonus", 0.2, 0.0, 0.99);
   c.triangle_candidates = static_cast<int>(r.get_int("triangle_candidates", 6, 0, 1024));
   c.axis_candidates = static_cast<int>(r.get_int("axis_candidates", 2, 0, 64));
@@ -60,7 +60,11 @@ AccelKind make_bsp_kind() {
            {"leaf_size", "4", "nodes with at most this many primitives become leaves"},
            {"max_depth", "0", "safety depth limit; 0 = 6 + 1.3 log2 N, at most 48"},
            kernel_param_doc()},
-          [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_bsp(std::move(scene), read_bsp_config(r)); },
+          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
+            BspConfig c = read_bsp_config(r);
+            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
+            return make_bsp(std::move(scene), c);
+          },
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_bsp_config(r).kernel, "exact classification, error-bounded traversal");
           },

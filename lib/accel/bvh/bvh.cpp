@@ -79,7 +79,8 @@ BvhConfig read_bvh_config(SpecReader& r) {
   // Wide trees test a packet of kPacketWidth triangles for about the price of one box test, so
   // their binary tree is built with costlier traversal, i.e. fuller leaves (measured on the CGAL
   // meshes: c_trav = 3 is ~10% faster than 1 at width 8 and halves the packed-leaf memory).
-  read_sah_constants(r, c.width == 2 ? "bvh" : "bvh" + std::to_string(c.width), c.width == 2 ? 1.0 : 3.0, 1.0, c.cost);
+  c.fitted_cost =
+      read_sah_constants(r, c.width == 2 ? "bvh" : "bvh" + std::to_string(c.width), c.width == 2 ? 1.0 : 3.0, 1.0, c.cost);
   // Wide trees' leaves are tested a packet at a time, so their SAH counts whole packets (as
   // Embree's counts blocks of 4 triangles).
   c.cost.leaf_block = c.width == 2 ? 1u : static_cast<unsigned>(kPacketWidth);
@@ -112,7 +113,11 @@ AccelKind make_bvh_kind() {
   return {"bvh",
           "BVH: midpoint/median/sweep-SAH/binned-SAH/SBVH builders, near-first stack traversal",
           bvh_params(),
-          [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_bvh(std::move(scene), read_bvh_config(r)); },
+          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
+            BvhConfig c = read_bvh_config(r);
+            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
+            return make_bvh(std::move(scene), c);
+          },
           [](SpecReader& r) -> AccuracyBound {
             const BvhConfig c = read_bvh_config(r);
             if (c.robust) return kernel_accuracy(c.kernel, "Ize's conservative box test");

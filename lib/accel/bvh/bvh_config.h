@@ -1,7 +1,9 @@
 #pragma once
 /// Parameters of the BVH (`bvh:key=value,...`); the factory fills them and rejects others.
 #include <cstddef>
+#include <optional>
 
+#include "accel/common/fitted_cost.h"
 #include "accel/common/kernel_choice.h"
 
 namespace raylab {
@@ -51,6 +53,8 @@ struct BvhConfig {
   /// as Embree), and spatial splits use half as many.
   int bins = 32;
   BvhSahCost cost;
+  /// `cost=MODEL` of the spec, which the build resolves into `cost` (fitted_cost.h).
+  std::optional<FittedCostRequest> fitted_cost;
   /// SBVH: a spatial split is tried only where the object split's child overlap exceeds
   /// alpha·SA(root) (Stich et al. 2009 §4.3).
   double spatial_alpha = 1e-5;

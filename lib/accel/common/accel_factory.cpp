@@ -68,7 +68,7 @@ std::vector<AccelKind> make_registry() {
        {{"kernel", "certified",
          "ray-triangle kernel: certified (float with a forward error bound, exact CGAL fallback) | watertight (Woop et "
          "al. 2013) | mt (Moller-Trumbore) | exact (CGAL)"}},
-       [](std::shared_ptr<const Scene> scene, SpecReader& r) {
+       [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext&) {
          return make_brute(std::move(scene), r.get_choice("kernel", "certified", kKernels));
        },
        [](SpecReader& r) -> AccuracyBound {
@@ -86,12 +86,14 @@ std::vector<AccelKind> make_registry() {
   kinds.push_back({"exact",
                    "the exact oracle: CGAL AABB-tree candidates, exact predicates, exact first-hit order",
                    {},
-                   [](std::shared_ptr<const Scene> scene, SpecReader&) { return make_exact_oracle(std::move(scene)); },
+                   [](std::shared_ptr<const Scene> scene, SpecReader&, const BuildContext&) {
+                     return make_exact_oracle(std::move(scene));
+                   },
                    [](SpecReader&) -> AccuracyBound { return exact_accuracy("exact by construction"); }});
   kinds.push_back({"embree",
                    "Intel Embree 3 (rtcIntersect1/rtcOccluded1), the speed baseline",
                    {{"quality", "medium", "rtcSetSceneBuildQuality: low | medium | high"}},
-                   [](std::shared_ptr<const Scene> scene, SpecReader& r) {
+                   [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext&) {
                      return make_embree_accel(std::move(scene), read_embree(r, false));
                    },
                    [](SpecReader& r) -> AccuracyBound {
@@ -106,7 +108,7 @@ std::vector<AccelKind> make_registry() {
   kinds.push_back({"embree-robust",
                    "Intel Embree 3 with RTC_SCENE_FLAG_ROBUST (watertight along edges)",
                    {{"quality", "medium", "rtcSetSceneBuildQuality: low | medium | high"}},
-                   [](std::shared_ptr<const Scene> scene, SpecReader& r) {
+                   [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext&) {
                      return make_embree_accel(std::move(scene), read_embree(r, true));
                    },
                    [](SpecReader& r) -> AccuracyBound {
@@ -121,7 +123,7 @@ std::vector<AccelKind> make_registry() {
       {"grid",
        "the lecture's uniform grid: d·∛n cells, 3D-DDA (Amanatides & Woo 1987), in-cell acceptance, mailboxes",
        grid_cell_params(),
-       [](std::shared_ptr<const Scene> scene, SpecReader& r) -> std::unique_ptr<Aggregate> {
+       [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext&) -> std::unique_ptr<Aggregate> {
          const GridConfig c = read_grid_config(r);
          auto make = [c](std::shared_ptr<const Scene> s) -> std::unique_ptr<Aggregate> {
            return std::make_unique<UniformGrid>(std::move(s), c);
@@ -135,7 +137,7 @@ std::vector<AccelKind> make_registry() {
       {"nested-grid",
        "grids in crowded cells (the lecture's nested grid) or the two-level grid of Kalojanov et al. 2011",
        nested_grid_params(),
-       [](std::shared_ptr<const Scene> scene, SpecReader& r) -> std::unique_ptr<Aggregate> {
+       [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext&) -> std::unique_ptr<Aggregate> {
          const NestedGridConfig c = read_nested_grid_config(r);
          auto make = [c](std::shared_ptr<const Scene> s) -> std::unique_ptr<Aggregate> {
            return std::make_unique<NestedGrid>(std::move(s), c);
@@ -282,13 +284,14 @@ const AccelKind& find_accelerator_kind(const std::string& name) {
   throw InputError("unknown accelerator '" + name + "' (valid: " + names + ")");
 }
 
-std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared_ptr<const Scene> scene) {
+std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared_ptr<const Scene> scene,
+                                            const BuildContext& context) {
   SpecReader reader(parse_spec(spec));
   const AccelKind& kind = find_accelerator_kind(reader.spec().name);
   reader.reject_unknown_keys(kind.params);
   if (scene && scene->instanced()) require_valid_instances(*scene);
   if (!scene || scene->total_primitive_count() == 0) throw InputError("accelerator '" + spec + "': the scene is empty");
-  auto accel = kind.build(std::move(scene), reader);
+  auto accel = kind.build(std::move(scene), reader, context);
   reader.finish(kind.params);
   return accel;
 }

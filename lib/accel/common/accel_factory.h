@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "accel/common/fitted_cost.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/kernel_choice.h"
 #include "accel/exact/contact_classes.h"
@@ -75,8 +76,9 @@ struct AccelKind {
   std::string summary;
   std::vector<ParamDoc> params;
   /// Builds the accelerator on `scene`, reading its parameters from `reader` (the factory calls
-  /// reader.finish(params) afterwards).
-  std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>, SpecReader&)> build;
+  /// reader.finish(params) afterwards) and resolving what lies above lib/accel (`cost=`) through
+  /// the context.
+  std::function<std::unique_ptr<Aggregate>(std::shared_ptr<const Scene>, SpecReader&, const BuildContext&)> build;
   /// The accuracy the oracle suite holds this accelerator to, given its parameters.
   std::function<AccuracyBound(SpecReader&)> accuracy;
   /// Parameter settings the oracle suite runs besides the defaults, e.g. {"kernel=mt"}.
@@ -117,8 +119,11 @@ struct AccelRegistration {
 /// Looks up `name`; throws InputError listing the valid names.
 const AccelKind& find_accelerator_kind(const std::string& name);
 
-/// Builds the accelerator described by `spec` on `scene`; throws InputError for bad specs.
-std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared_ptr<const Scene> scene);
+/// Builds the accelerator described by `spec` on `scene`; throws InputError for bad specs. A
+/// spec's `cost=MODEL` is resolved through `context` (fitted_cost.h; lib/cost's
+/// model_build_context() reads model files): without a resolver it is an InputError.
+std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared_ptr<const Scene> scene,
+                                            const BuildContext& context = {});
 
 /// The accuracy bound for `spec`.
 AccuracyBound accuracy_bound(const std::string& spec);

@@ -250,7 +250,7 @@ AccelKind make_certified_instances_kind() {
           "certified first hits for an instanced scene's flat copy without storing it (what kernel=certified uses "
           "beyond 2^26 primitives): a binned BVH per base, node boxes carried to world space per ray",
           {},
-          [](std::shared_ptr<const Scene> scene, SpecReader&) -> std::unique_ptr<Aggregate> {
+          [](std::shared_ptr<const Scene> scene, SpecReader&, const BuildContext&) -> std::unique_ptr<Aggregate> {
             return std::make_unique<CertifiedInstances>(std::move(scene));
           },
           [](SpecReader&) { return exact_accuracy("certified kernel on the flat copy's world vertices, conservative world boxes"); }};

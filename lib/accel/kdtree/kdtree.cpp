@@ -57,7 +57,7 @@ KdTreeConfig read_kdtree_config(SpecReader& r) {
   c.sweep = r.get_choice("sweep", "events", kSweeps) == "sort" ? KdSweep::sort : KdSweep::events;
   c.clip = parse_clip_mode(r.get_choice("clip", "exact", clip_mode_names()));
   c.traversal = r.get_choice("traversal", "stack", kTraversals) == "recursive" ? KdTraversal::recursive : KdTraversal::stack;
-  read_sah_constants(r, "kdtree", 1.0, kKdDefaultIsect, c.cost);
+  c.fitted_cost = read_sah_constants(r, "kdtree", 1.0, kKdDefaultIsect, c.cost);
   c.cost.empty_bonus = r.get_double("empty_bonus", 0.2, 0.0, 0.99);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 64));
   c.leaf_size = static_cast<int>(r.get_int("leaf_size", 4, 1, 1 << 20));
@@ -82,7 +82,11 @@ AccelKind make_kdtree_kind() {
   return {"kdtree",
           "kd-tree: midpoint/median/SAH builders, sort or event sweep, exact split clipping",
           kdtree_params(),
-          [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_kdtree(std::move(scene), read_kdtree_config(r)); },
+          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
+            KdTreeConfig c = read_kdtree_config(r);
+            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
+            return make_kdtree(std::move(scene), c);
+          },
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_kdtree_config(r).kernel, "conservative placement and traversal");
           },

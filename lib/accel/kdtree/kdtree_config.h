@@ -1,7 +1,9 @@
 #pragma once
 /// Parameters of the kd-tree (`kdtree:key=value,...`); the factory fills them and rejects others.
 #include <cstdint>
+#include <optional>
 
+#include "accel/common/fitted_cost.h"
 #include "accel/common/kernel_choice.h"
 #include "accel/kdtree/split_clipping.h"
 #include "accel/kdtree/sah_cost.h"
@@ -45,6 +47,8 @@ struct KdTreeConfig {
   KdTraversal traversal = KdTraversal::stack;
   /// C_trav = 1, C_isect = 0.07 (kKdDefaultIsect), empty bonus 0.2.
   SahCost cost{1.0, kKdDefaultIsect, 0.2, 0.0};
+  /// `cost=MODEL` of the spec, which the build resolves into `cost` (fitted_cost.h).
+  std::optional<FittedCostRequest> fitted_cost;
   /// Safety depth limit; 0 means the pbrt-v3 rule 8 + 1.3·log2(N) (pbrt-v3 §4.4.1), capped at 64.
   int max_depth = 0;
   /// midpoint and median stop at this many primitives (SAH stops on cost alone).

@@ -26,7 +26,7 @@ std::optional<std::uint64_t> Octree::structure_hash() const {
 OctreeConfig read_octree_config(SpecReader& r) {
   OctreeConfig c;
   c.clip = parse_clip_mode(r.get_choice("clip", "exact", clip_mode_names()));
-  read_sah_constants(r, "octree", 48.0, 1.5, c.cost);
+  c.fitted_cost = read_sah_constants(r, "octree", 48.0, 1.5, c.cost);
   c.max_depth = static_cast<int>(r.get_int("max_depth", 0, 0, 20));
   c.mailbox = r.get_bool("mailbox", false);
   const std::string traversal = r.get_choice("traversal", "stack", {"stack", "revelles", "kd"});
@@ -63,7 +63,11 @@ AccelKind make_octree_kind() {
             "stack (iterative, crossings ordered per node) | revelles (parametric, Revelles et al. 2000) | kd (centre "
             "planes as three kd-tree splits)"},
            kernel_param_doc()},
-          [](std::shared_ptr<const Scene> scene, SpecReader& r) { return make_octree(std::move(scene), read_octree_config(r)); },
+          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
+            OctreeConfig c = read_octree_config(r);
+            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
+            return make_octree(std::move(scene), c);
+          },
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_octree_config(r).kernel, "conservative placement and traversal");
           },

@@ -1,5 +1,8 @@
 #pragma once
 /// Parameters of the octree (`octree:key=value,...`).
+#include <optional>
+
+#include "accel/common/fitted_cost.h"
 #include "accel/common/kernel_choice.h"
 #include "accel/kdtree/sah_cost.h"
 #include "accel/kdtree/split_clipping.h"
@@ -24,6 +27,8 @@ struct OctreeConfig {
   /// structure several times the kd-tree's size (references are copied into 40-byte packet
   /// lanes), and a leaf of up to 4 triangles costs one packet test whatever its count.
   SahCost cost{48.0};
+  /// `cost=MODEL` of the spec, which the build resolves into `cost` (fitted_cost.h).
+  std::optional<FittedCostRequest> fitted_cost;
   /// Safety depth limit; 0 means 3 + ceil(log8 N), at most 20.
   int max_depth = 0;
   /// Remember the last primitives tested by a ray and skip repeats.
