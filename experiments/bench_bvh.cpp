@@ -22,6 +22,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/model_file.h"
 #include "bench_env.h"
 #include "embree_direct.h"
 #include "geometry/float_mode.h"
@@ -81,7 +82,7 @@ void BM_BvhTrace(benchmark::State& state, const std::string& scene_spec, const s
   const auto& rays = rays_for(scene_spec, ray_spec);
   const bool any = is_any_hit_ray_spec(ray_spec);
   const bool robust = accel_spec.find("robust=off") == std::string::npos;
-  const auto accel = make_accelerator(accel_spec, scene);
+  const auto accel = make_accelerator(accel_spec, scene, model_build_context());
   const auto like = make_accelerator(robust ? "embree-robust" : "embree", scene);
   const auto fast = make_accelerator("embree", scene);
   const DirectEmbree embree_direct(*like);
