@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "accel/common/accel_factory.h"
+#include "cost/model_file.h"
 #include "geometry/input_error.h"
 #include "scene/scene_spec.h"
 
@@ -29,7 +30,10 @@ inline std::vector<std::string> accelerator_specs_from_env(const char* variable,
   try {
     if (specs.empty()) throw InputError("no accelerator spec");
     const auto probe = make_scene("sphere:n=20");
-    for (const auto& spec : specs) make_accelerator(spec, probe);
+    // cost= models are read and checked, but the probe's size is not held to their fitted range.
+    BuildContext context;
+    context.fitted_costs = [](const FittedCostRequest& r, double) { return load_builder_costs(r.model, r.family); };
+    for (const auto& spec : specs) make_accelerator(spec, probe, context);
   } catch (const InputError& e) {
     std::cerr << "error: $" << variable << ": " << e.what() << "\n";
     std::exit(2);
