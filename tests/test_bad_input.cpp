@@ -288,6 +288,22 @@ TEST(BadInput, SubdivisionPastTheLimitIsRefusedBeforeAllocating) {
   EXPECT_EQ(make_scene("subdivided:of=(soup:n=8),levels=2")->mesh.size(), 128u);
 }
 
+/// A bad accelerator parameter value is refused before the scene is loaded: on a scene of 4·10^7
+/// spheres' triangles (gigabytes) under a 1 GiB address-space limit, one error line naming it, at
+/// once (validate_accelerator_spec, the one check of the tool and the sweep plans).
+TEST(BadInputTool, ABadAcceleratorValueIsRefusedBeforeTheSceneIsLoaded) {
+  const long limit = kAddressSanitizer ? 0 : 1L << 20;  // KiB: 1 GiB
+  for (const std::string& accel : {"kdtree:c_isect=nan", "bvh:width=3", "grid:d=1000", "bvh:robust=off,kernel=certified",
+                                   "kdtree:cost=default,c_trav=2"}) {
+    for (const std::string command : {"trace", "render --out /tmp/raylab_bad_accel.png"}) {
+      const std::string args = command + " --scene sphere:n=40000000 --accel " + accel;
+      const ToolRun r = run_tool(args, limit);
+      expect_one_error_line(r, args, accel.substr(accel.find(':') + 1, 4));
+      EXPECT_LT(r.seconds, 20.0) << args;
+    }
+  }
+}
+
 /// A negative count, wherever a count is given (scene and ray specs, --threads, --width,
 /// --passes, sweep shards, merge shards), is refused on one line naming it.
 TEST(BadInputTool, NegativeCountsGiveOneErrorLine) {

@@ -230,10 +230,7 @@ int run_predict_command(const PredictCommand& o) {
   if (o.passes < 5 || o.passes > 1000) throw InputError("--passes " + std::to_string(o.passes) + ": expected 5..1000");
   const std::shared_ptr<const CostModelSet> loaded = load_model_file(o.model);
   const CostModelSet& models = *loaded;
-  {
-    SpecReader reader(parse_spec(o.accel));
-    reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);
-  }
+  validate_accelerator_spec(o.accel);
   const std::string family = structure_family(o.accel);
   const FamilyModel& model = models.family(family);
   const std::string ray_kind = parse_spec(o.rays).name;

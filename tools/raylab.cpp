@@ -240,11 +240,7 @@ int run_trace(const TraceCommand& o) {
   if (!o.check.empty() && o.check != "exact" && o.check != "brute")
     throw InputError("--check " + o.check + ": expected exact or brute");
   if (o.threads < 0 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 0..1024");
-  // Validate the accelerator spec before any expensive work.
-  {
-    SpecReader reader(parse_spec(o.accel));
-    reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);
-  }
+  validate_accelerator_spec(o.accel);  // before any expensive work
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
   const std::vector<Ray> rays = timed_step("generating rays " + o.rays, [&] { return make_ray_set(o.rays, scene); });
   if (!o.rays_out.empty()) write_rays(o.rays_out, rays);
@@ -418,6 +414,7 @@ int run_render(const RenderCommand& o) {
   if (o.threads < 0 || o.threads > 1024) throw InputError("--threads " + std::to_string(o.threads) + ": expected 0..1024");
   if (o.out.size() < 5 || o.out.substr(o.out.size() - 4) != ".png") throw InputError("--out " + o.out + ": expected a .png path");
   if (o.log_scale && !o.heatmap) throw InputError("--log: a log colour scale needs --heatmap");
+  validate_accelerator_spec(o.accel);
   const auto scene = timed_step("loading scene " + o.scene, [&] { return make_scene(o.scene); });
   auto accel = timed_step("building " + o.accel, [&] { return make_accelerator(o.accel, scene, model_build_context()); });
   const Camera camera = placed_camera(parse_camera_placement(o.camera), scene->bounds());

@@ -36,9 +36,7 @@ void validate_scene_spec(const std::string& where, const std::string& spec) {
 }
 
 void validate_accel_spec(const std::string& where, const std::string& spec) {
-  SpecReader reader(parse_spec(spec));
-  const AccelKind& kind = find_accelerator_kind(reader.spec().name);
-  reader.reject_unknown_keys(kind.params);
+  validate_accelerator_spec(spec);
   const std::string family = structure_family(spec);
   const auto& families = feature_families();
   if (std::find(families.begin(), families.end(), family) == families.end()) {

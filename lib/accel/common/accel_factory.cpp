@@ -329,4 +329,13 @@ AccuracyBound accuracy_bound(const std::string& spec) {
   return b;
 }
 
+void validate_accelerator_spec(const std::string& spec) {
+  {
+    // Unknown keys first: their message lists the valid ones.
+    SpecReader reader(parse_spec(spec));
+    reader.reject_unknown_keys(find_accelerator_kind(reader.spec().name).params);
+  }
+  accuracy_bound(spec);
+}
+
 }  // namespace raylab

@@ -128,6 +128,12 @@ std::unique_ptr<Aggregate> make_accelerator(const std::string& spec, std::shared
 /// The accuracy bound for `spec`.
 AccuracyBound accuracy_bound(const std::string& spec);
 
+/// The one check of an accelerator spec before any scene is loaded or structure built (the
+/// tool's commands, the sweep plans): a known name, known keys, and every value the kind reads
+/// (ranges, choices, exclusive keys), as accuracy_bound reads them. Throws InputError naming the
+/// fault. Reads no model file for `cost=`; `auto` reads its model.
+void validate_accelerator_spec(const std::string& spec);
+
 /// `spec` with every parameter of its kind written out, in the kind's documented order, the given
 /// value or else the default (ParamDoc::default_value): `kdtree` → `kdtree:builder=sah,sweep=events,
 /// ...`. The report names each key number's spec this way, so that a changed default shows up as a
