@@ -262,6 +262,30 @@ def default_kernel_line(out: pathlib.Path) -> str:
             text += (f" The default `bvh` reached {min(vs_fast):.2f}–{max(vs_fast):.2f} of Embree's throughput and "
                      f"{min(vs_robust):.2f}–{max(vs_robust):.2f} of Embree robust's (primary, diffuse and shadow "
                      "rays, single thread).")
+    chart = out / "speed_accuracy.csv"
+    if chart.exists():
+        # Certified (default) over watertight time per structure and scene family of the headline
+        # chart: each structure's default against its `kernel=watertight` variant, same rays.
+        throughput = {}
+        with open(chart) as f:
+            for r in csv.DictReader(f):
+                if r.get("throughput_vs_embree") and r.get("family") and r.get("method"):
+                    throughput[(r["family"], r["method"])] = float(r["throughput_vs_embree"])
+        by_family = {}
+        for (family, method), t in throughput.items():
+            if ":" in method or "kernel" in method:
+                continue
+            twin = throughput.get((family, method + ":kernel=watertight"))
+            if twin and t > 0:
+                by_family.setdefault(family, []).append((twin / t, method))
+        if by_family:
+            parts = []
+            for family, ratios in sorted(by_family.items()):
+                lo, hi = min(ratios), max(ratios)
+                parts.append(f"{family} {lo[0]:.2f}–{hi[0]:.2f} (`{hi[1]}` highest)")
+            text += (" On the headline chart's scene families, the default structures' time over their "
+                     "`kernel=watertight` variants' (primary, diffuse and shadow rays; "
+                     "[speed against accuracy](speed_accuracy.md)): " + "; ".join(parts) + ".")
     return text
 
 
