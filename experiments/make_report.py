@@ -234,9 +234,10 @@ def machine_info() -> dict:
 
 
 def default_kernel_line(out: pathlib.Path) -> str:
-    """What the default kernel guarantees and what it cost in this run, from exp_certainty's CSVs
-    (certainty.csv: the BVH's paths and Embree on the same rays; certainty_structures.csv: every
-    structure's certified over watertight time); empty when the run has neither."""
+    """What the default kernel guarantees, then what it cost in this run where the run has the data:
+    exp_certainty's CSVs (certainty_structures.csv: every structure's certified over watertight
+    time; certainty.csv: the BVH's paths and Embree on the same rays) and exp_speed_accuracy's
+    (speed_accuracy.csv: each default against its kernel=watertight variant per scene family)."""
     text = ("**Defaults**: every accelerator traces with the certified kernel unless its spec names another: its "
             "first hit is the exact oracle's on every ray (touching, grazing, edge- and vertex-aimed rays "
             "included), held to 0 mismatches by the oracle suite.")
@@ -255,9 +256,9 @@ def default_kernel_line(out: pathlib.Path) -> str:
             for r in csv.DictReader(f):
                 if r["rays"] in ("primary", "diffuse", "shadow"):
                     ns[(r["scene"], r["rays"], r["accel"])] = float(r["ns_per_ray"])
-        vs_fast = [ns[(s, k, "embree")] / v for (s, k, a), v in ns.items() if a == "bvh" and (s, k, "embree") in ns]
-        vs_robust = [ns[(s, k, "embree-robust")] / v for (s, k, a), v in ns.items()
-                     if a == "bvh" and (s, k, "embree-robust") in ns]
+        def vs(embree: str) -> list:
+            return [ns[(s, k, embree)] / v for (s, k, a), v in ns.items() if a == "bvh" and (s, k, embree) in ns]
+        vs_fast, vs_robust = vs("embree"), vs("embree-robust")
         if vs_fast and vs_robust:
             text += (f" The default `bvh` reached {min(vs_fast):.2f}–{max(vs_fast):.2f} of Embree's throughput and "
                      f"{min(vs_robust):.2f}–{max(vs_robust):.2f} of Embree robust's (primary, diffuse and shadow "

@@ -333,10 +333,10 @@ std::shared_ptr<const CostModelSet> load_model_file(const std::string& path) {
   return it->second.second;
 }
 
-FittedSahCost load_builder_costs(const std::string& path, const std::string& family) {
-  const std::string resolved = resolve_model_path(path);
-  const std::shared_ptr<const CostModelSet> set = load_model_file(resolved);
-  const FamilyModel& m = set->family(family);
+namespace {
+
+/// `m`'s builder constants (m the family `family` of the model file `resolved`), checked usable.
+const FittedSahCost& usable_builder_costs(const FamilyModel& m, const std::string& resolved, const std::string& family) {
   if (!(m.builder.c_trav > 0) || !(m.builder.c_isect > 0) || !(m.builder.c_leaf >= 0))
     throw InputError(resolved + ": the fitted constants of '" + family + "' are not positive (c_trav " +
                      std::to_string(m.builder.c_trav) + ", c_isect " + std::to_string(m.builder.c_isect) +
@@ -344,19 +344,29 @@ FittedSahCost load_builder_costs(const std::string& path, const std::string& fam
   return m.builder;
 }
 
+}  // namespace
+
+FittedSahCost load_builder_costs(const std::string& path, const std::string& family) {
+  const std::string resolved = resolve_model_path(path);
+  const std::shared_ptr<const CostModelSet> set = load_model_file(resolved);
+  return usable_builder_costs(set->family(family), resolved, family);
+}
+
 BuildContext model_build_context() {
   BuildContext context;
   context.fitted_costs = [](const FittedCostRequest& request, double primitives) {
-    const FittedSahCost costs = load_builder_costs(request.model, request.family);
-    const std::shared_ptr<const CostModelSet> set = load_model_file(request.model);
+    // One read of the model (load_model_file) for the constants and the range both.
+    const std::string resolved = resolve_model_path(request.model);
+    const std::shared_ptr<const CostModelSet> set = load_model_file(resolved);
     const FamilyModel& m = set->family(request.family);
+    const FittedSahCost costs = usable_builder_costs(m, resolved, request.family);
     if (const auto range = m.ranges.find("primitives"); range != m.ranges.end()) {
       const FeatureRangeCheck check = check_feature_range("primitives", primitives, range->second);
       // Once per model file and family in a process: a sweep builds many structures.
       static std::mutex mutex;
       static std::set<std::string> warned;
       std::lock_guard lock(mutex);
-      if (check.outside() && warned.insert(resolve_model_path(request.model) + "|" + request.family).second)
+      if (check.outside() && warned.insert(resolved + "|" + request.family).second)
         warn_input("cost=" + request.model + ": " + request.family + " " + check.describe() +
                    "; its constants are used as they are");
     }
