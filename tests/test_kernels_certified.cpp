@@ -16,6 +16,7 @@
 #include "geometry/float_mode.h"
 #include "geometry/input_error.h"
 #include "rays/feature_rays.h"
+#include "rays/offset_ray.h"
 #include "rays/random.h"
 #include "scene/scene_spec.h"
 
@@ -201,6 +202,68 @@ TEST(CertifiedKernel, PackedLanesAgreeWithTheExactFirstHit) {
     }
   }
   EXPECT_GT(hits, rays / 10);
+}
+
+// Rays that start on a large triangle (secondary rays: origin offset off the surface as the lab's
+// ray generators do, Wächter and Binder 2019, or not offset, or exactly in an axis-aligned
+// triangle's plane), leaving or entering it, grazing included, near the origin, 10^4 from it and
+// at 10^-4: scalar and packed tests give the exact first hit, and the triangle the ray starts on
+// is rejected (the ray leaves it) or hit (the ray enters it) without the double stage on most
+// rays (CertifiedKernel::plane_crossing_t), where the float filter's enclosure of its t straddles 0.
+TEST(CertifiedKernel, RaysStartingOnALargeTriangleGetTheExactFirstHit) {
+  const FloatModeScope ftz(true);
+  Rng rng(17);
+  std::size_t leaving = 0, leaving_double_stage = 0, entering = 0, entering_double_stage = 0, hits = 0, rays = 0;
+  for (const double scale : {1e-4, 1.0, 1e4}) {
+    for (const double offset : {0.0, 1e4}) {
+      for (int k = 0; k < 400; ++k) {
+        const int kind = k % 4;  // 0 offset above, leaving; 1 offset below, entering; 2 on a z plane; 3 not offset
+        const Vec3d shift = Vec3d(rng.uniform(), rng.uniform(), rng.uniform()) * (offset * scale);
+        auto corner = [&] { return Vec3f(shift + Vec3d(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * (20.0 * scale)); };
+        Tri big{corner(), corner(), corner()};
+        if (kind == 2) big.b.z = big.c.z = big.a.z;
+        const Vec3d n0 = cross(Vec3d(big.b) - Vec3d(big.a), Vec3d(big.c) - Vec3d(big.a));
+        if (!(dot(n0, n0) > 0.0)) continue;
+        const Vec3d n = normalize(n0);
+        const double wa = rng.uniform(), wb = rng.uniform() * (1.0 - wa);
+        const Vec3f on(Vec3d(big.a) * (1.0 - wa - wb) + Vec3d(big.b) * wa + Vec3d(big.c) * wb);
+        // A direction into the side `side` of the plane, grazing on every fifth ray.
+        const double side = kind == 1 ? -1.0 : (rng.uniform() < 0.5 ? 1.0 : -1.0);
+        const Vec3d tangent = normalize(cross(n, Vec3d(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5)));
+        const double lift = k % 5 == 0 ? 1e-3 : 0.1 + rng.uniform();
+        const Vec3d w = normalize(tangent + n * (side * lift));
+        Vec3f org = on;
+        if (kind == 0) org = offset_ray_origin(on, Vec3f(n * side));
+        if (kind == 1) org = offset_ray_origin(on, Vec3f(n * -side));
+        const Tri before{corner(), corner(), corner()}, after{corner(), corner(), corner()};
+        const std::vector<Tri> tris = {before, big, after};
+        const Ray ray{org, Vec3f(w), 0.0f, k % 3 == 0 ? float(5.0 * scale) : INFINITY};
+        ++rays;
+        interval_stage_taken_on_this_thread() = false;
+        const int scalar = first_hit<CertifiedKernel>(ray, tris);
+        if (kind == 0 && k % 5 != 0) {
+          ++leaving;
+          leaving_double_stage += interval_stage_taken_on_this_thread();
+        }
+        if (kind == 1 && k % 5 != 0) {
+          ++entering;
+          entering_double_stage += interval_stage_taken_on_this_thread();
+        }
+        EXPECT_TRUE(exactly_first(ray, tris, scalar)) << "scale " << scale << ", offset " << offset << ", ray " << k;
+        hits += scalar >= 0;
+        const std::vector<TrianglePacket> packets = packed(tris);
+        auto ctx = CertifiedKernel::prepare(ray);
+        TriangleHit h;
+        const int lane = PacketKernel<CertifiedKernel>::intersect<false>(ctx, PacketKernel<CertifiedKernel>::Ray(ctx), packets[0], h);
+        EXPECT_TRUE(exactly_first(ray, tris, lane)) << "packed, scale " << scale << ", offset " << offset << ", ray " << k;
+      }
+    }
+  }
+  EXPECT_GT(hits, rays / 4) << "the rays entering the triangle hit it";
+  EXPECT_LT(leaving_double_stage, leaving / 10) << "the triangle a ray leaves needed the double stage";
+  EXPECT_LT(entering_double_stage, entering / 10) << "the triangle a ray enters needed the double stage";
+  std::cout << "[ start on a triangle ] " << rays << " rays, " << hits << " hits; double stage on " << leaving_double_stage
+            << " of " << leaving << " leaving and " << entering_double_stage << " of " << entering << " entering rays\n";
 }
 
 // The stage counters: a ray whose float filter decides everything reaches neither the double

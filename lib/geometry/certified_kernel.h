@@ -40,7 +40,12 @@
 ///     closed triangle. Three certain equal signs: it crosses the triangle's interior, det =
 ///     U+V+W is certainly non-zero, and t = (U·az + V·bz + W·cz)/det with az = (q_kz - o_kz)/d_kz
 ///     is enclosed in double interval arithmetic (interval.h) from Û ± B; the hit is certain
-///     when that interval lies in [tmin, tmax] and comes before the current first hit's.
+///     when that interval lies in [tmin, tmax] and comes before the current first hit's. Where
+///     it cannot be, for a triangle that reaches the origin's depth (the one a secondary ray
+///     starts from, crossed just before or after the origin), t is enclosed from the plane's
+///     determinants in double with a static bound (plane_crossing_t, Shewchuk's orient3d filter);
+///     the same enclosure rejects a triangle of uncertain edge signs whose plane is met outside
+///     [tmin, tmax] before the double stage does.
 ///  2. double: whatever stage 1 leaves open (a small edge function, a t near an interval end or
 ///     near the current first hit's) is recomputed in double interval arithmetic from the float
 ///     inputs, which encloses U, V, W and t about 2^29 times more tightly.
@@ -239,8 +244,13 @@ struct CertifiedKernel {
                               float V, float W, float B, float az, float bz, float cz, TriangleHit& hit) {
     if (!((U > B && V > B && W > B) || (U < -B && V < -B && W < -B)))
       return refine_triangle(c, prim, triangle(p0, p1, p2), hit);
-    // The line surely crosses the triangle's interior, at the t enclosed by `t`.
-    const Interval t = plane_t(c, U, V, W, B, az, bz, cz);
+    // The line surely crosses the triangle's interior. A triangle whose vertices reach the
+    // origin's depth may be the one the ray starts from, crossed just before or just after the
+    // origin, where plane_t's enclosure straddles 0; plane_crossing_t's does not.
+    const bool reaches_origin_depth = c.ray.dir[c.kz] > 0.0f ? std::min(std::min(az, bz), cz) <= 0.0f
+                                                             : std::max(std::max(az, bz), cz) >= 0.0f;
+    Interval t;
+    if (!(reaches_origin_depth && plane_crossing_t(c.ray, p0, p1, p2, t))) t = plane_t(c, U, V, W, B, az, bz, cz);
     if (t.hi < c.ray.tmin || t.lo > c.ray.tmax || (c.has && t.lo > c.hi)) return false;
     if (!(t.lo >= c.ray.tmin && t.hi <= c.ray.tmax) || (c.has && !(t.hi < c.lo)))
       return refine_triangle(c, prim, triangle(p0, p1, p2), hit);  // an interval end or the order: tighter
@@ -300,6 +310,39 @@ struct CertifiedKernel {
     return (za + (v * (z(bz) - za) + w * (z(cz) - za)) / det) / dz;
   }
 
+  /// The exact t at which the line meets the triangle's plane, t = (p0 - o)·n / (d·n) with
+  /// n = (p1 - p0) × (p2 - p0), enclosed in `t` from the two determinants evaluated in double
+  /// with a static error bound (Shewchuk 1997's orient3d filter); false, with `t` unset, when
+  /// d·n is not surely non-zero or a bound overflows. The enclosure's width is about 2^-49 of the
+  /// determinants' magnitudes, not of the triangle's depth extent as plane_t's: a ray that starts
+  /// on a triangle, offset a few hundred ulps off it (Wächter and Binder, Ray Tracing Gems 2019,
+  /// ch. 6), meets that triangle's plane just before its origin (or just after it, a shadow ray
+  /// toward a light behind the surface), and this enclosure says on which side where plane_t's
+  /// straddles 0. A static filter: not counted as the double stage.
+  /// Error bound, with ε = 2^-53: the differences r = p0 - o, e1, e2 are double subtractions of
+  /// float inputs (relative error ε, and 2^-125 when an input is a subnormal read as 0 under
+  /// DAZ); from differences within ε, the computed r·(e1 × e2) is within (7ε + 56ε²)·P of the
+  /// exact value of those differences (Shewchuk's o3derrboundA, P = Σ|r_i|·(|e1_j·e2_k| +
+  /// |e1_k·e2_j|)), and their relative errors add 3ε·P more: below 2^-49·P for P computed in
+  /// double. The absolute errors add at most 18·2^-125·L² + O(2^-250·L), L the largest |r_i|,
+  /// |e1_i|, |e2_i|, |d_i|, and flushed double results 2^-1022 each: below 2^-120·(L² + 1).
+  /// The same holds for d·n with d's components in place of r's.
+  static bool plane_crossing_t(const Ray& ray, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, Interval& t) {
+    const Vec3d a(p0), e1 = Vec3d(p1) - a, e2 = Vec3d(p2) - a, r = a - Vec3d(ray.org), d(ray.dir);
+    const double nx = e1.y * e2.z - e1.z * e2.y, ny = e1.z * e2.x - e1.x * e2.z, nz = e1.x * e2.y - e1.y * e2.x;
+    const double mx = std::abs(e1.y * e2.z) + std::abs(e1.z * e2.y), my = std::abs(e1.z * e2.x) + std::abs(e1.x * e2.z),
+                 mz = std::abs(e1.x * e2.y) + std::abs(e1.y * e2.x);
+    const double num = r.x * nx + r.y * ny + r.z * nz, den = d.x * nx + d.y * ny + d.z * nz;
+    const double L = std::max(std::max(std::max(max_abs(e1), max_abs(e2)), max_abs(r)), max_abs(d));
+    const double absolute = 0x1p-120 * (L * L + 1.0);
+    const double num_bound = 0x1p-49 * (std::abs(r.x) * mx + std::abs(r.y) * my + std::abs(r.z) * mz) + absolute;
+    const double den_bound = 0x1p-49 * (std::abs(d.x) * mx + std::abs(d.y) * my + std::abs(d.z) * mz) + absolute;
+    if (!(std::abs(den) > den_bound) || !(num_bound < INFINITY)) return false;
+    t = Interval::rounded(num - num_bound, num + num_bound) / Interval::rounded(den - den_bound, den + den_bound);
+    return std::isfinite(t.lo) && std::isfinite(t.hi);
+  }
+  static double max_abs(const Vec3d& v) { return std::max(std::max(std::abs(v.x), std::abs(v.y)), std::abs(v.z)); }
+
   /// The double stage: the exact edge functions, det and t enclosed in double interval
   /// arithmetic from the float inputs (a relative width near 2^-50 instead of the float
   /// filter's 2^-20 or so). -1: the line surely misses the closed triangle; 1: it surely
@@ -354,6 +397,10 @@ struct CertifiedKernel {
 
   /// A triangle the float filter could not settle: the double stage, then the exact path.
   static bool refine_triangle(Context& c, unsigned prim, const Shape& tri, TriangleHit& hit) {
+    Interval plane;
+    if (plane_crossing_t(c.ray, tri.p0, tri.p1, tri.p2, plane) &&
+        (plane.hi < c.ray.tmin || plane.lo > c.ray.tmax || (c.has && plane.lo > c.hi)))
+      return false;  // whatever the edges decide, the plane is met outside [tmin, tmax] or after the first hit
     Interval t;
     const int verdict = triangle_t(c, tri, t);
     if (verdict < 0) return false;
