@@ -9,6 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "scene_test_files.h"
 
@@ -157,10 +160,16 @@ TEST(ToolCli, TraceCountsMismatchesPerContactClass) {
   EXPECT_EQ(j["guarantee"]["rule"], "tolerance");
   EXPECT_EQ(j["guarantee"]["max_mismatch_rate"]["touching"], 1.0);
 
-  // The certified kernel is the default; robust=off rules it out, and trace names the kernel that ran.
-  const ToolRun f = run_tool("trace --scene sphere:n=2000 --accel bvh:robust=off --rays primary:100 --json");
-  ASSERT_EQ(f.status, 0) << f.err;
-  EXPECT_EQ(nlohmann::json::parse(f.out)["kernel"], "watertight");
+  // The certified kernel is the default; robust=off rules it out (plain slab test and
+  // Moller-Trumbore), grid:accept=first takes the watertight one, and trace names the kernel that
+  // ran; Embree runs its own.
+  for (const auto& [accel, kernel] : std::vector<std::pair<std::string, std::string>>{
+           {"bvh:robust=off", "mt"}, {"grid:accept=first", "watertight"}, {"brute:kernel=mt", "mt"},
+           {"kdtree", "certified"}, {"embree", "embree"}}) {
+    const ToolRun f = run_tool("trace --scene sphere:n=2000 --accel " + accel + " --rays primary:100 --json");
+    ASSERT_EQ(f.status, 0) << f.err;
+    EXPECT_EQ(nlohmann::json::parse(f.out)["kernel"], kernel) << accel;
+  }
 
   // `raylab accels` states each bound per class, and the watertight one beside the default.
   const ToolRun a = run_tool("accels");

@@ -119,36 +119,12 @@ void print_accuracy(const std::string& label, const AccuracyBound& b) {
             << b.on_surface << ", ill_conditioned " << b.ill_conditioned << "\n";
 }
 
-/// The kernel a canonical spec's `kernel` value names. A default that another parameter decides is
-/// written as its rule, `certified (robust=on), watertight (robust=off)`: the clause whose
-/// condition the spec meets.
-std::string kernel_in_effect(const std::string& value, const std::map<std::string, std::string>& params) {
-  const auto trim = [](const std::string& t) {
-    const std::size_t first = t.find_first_not_of(", "), last = t.find_last_not_of(", ");
-    return first == std::string::npos ? std::string() : t.substr(first, last - first + 1);
-  };
-  for (std::size_t at = 0;;) {
-    const std::size_t open = value.find('(', at), close = value.find(')', open);
-    if (open == std::string::npos || close == std::string::npos) return value;
-    const std::string condition = value.substr(open + 1, close - open - 1);
-    const std::size_t eq = condition.find('=');
-    const auto it = params.find(condition.substr(0, eq));
-    if (eq != std::string::npos && it != params.end() && it->second == condition.substr(eq + 1))
-      return trim(value.substr(at, open - at));
-    at = close + 1;
-  }
-}
-
-/// The kernel `spec` runs (its kernel= value, defaults expanded; the accelerator's own name when it
-/// has no kernel parameter, as Embree's) and the accuracy it states (`raylab accels`), for trace.
+/// The kernel `spec` runs (its accuracy bound's, which reads the spec as the build does; the
+/// accelerator's own name when it runs none of raylab's, as Embree) and the accuracy it states
+/// (`raylab accels`), for trace.
 void put_kernel_guarantee(nlohmann::ordered_json& j, const std::string& spec) {
-  const SpecString canonical = parse_spec(canonical_spec(spec));
-  std::map<std::string, std::string> params;
-  for (const auto& [key, value] : canonical.params) params[key] = value;
-  std::string kernel = canonical.name;
-  if (const auto it = params.find("kernel"); it != params.end()) kernel = kernel_in_effect(it->second, params);
   const AccuracyBound b = accuracy_bound(spec);
-  j["kernel"] = kernel;
+  j["kernel"] = b.kernel.empty() ? parse_spec(spec).name : b.kernel;
   j["guarantee"] = {{"exact", b.exact},
                     {"rule", b.exact ? "exact" : "tolerance"},
                     {"statement", b.statement},

@@ -356,8 +356,11 @@ AccelKind make_auto_kind() {
             for (const auto& [family, m] : models.families) families.push_back(family);
             AccuracyBound loosest;
             loosest.exact = true;
+            bool first = true;
             for (const std::string& spec : auto_candidate_specs(families, model)) {
               const AccuracyBound b = accuracy_bound(spec);
+              loosest.kernel = first || loosest.kernel == b.kernel ? b.kernel : "";  // one kernel, or none named
+              first = false;
               loosest.exact = loosest.exact && b.exact;
               loosest.crossing_features = std::max(loosest.crossing_features, b.crossing_features);
               loosest.crossing_other = std::max(loosest.crossing_other, b.crossing_other);

@@ -15,7 +15,8 @@ struct RayCounters {
   /// every ray of the exact kernels), counted once per ray by AggregateBase.
   std::uint64_t exact_fallbacks = 0;
   /// Rays for which the certified kernel ran its double (interval) stage, counted once per ray
-  /// as exact_fallbacks; the rest were decided by its float filter alone.
+  /// as exact_fallbacks; the rest were decided by its static filters alone (in float, and the
+  /// plane's determinants in double).
   std::uint64_t interval_stage = 0;
 
   static constexpr bool enabled = true;

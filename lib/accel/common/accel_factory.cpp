@@ -73,13 +73,17 @@ std::vector<AccelKind> make_registry() {
        },
        [](SpecReader& r) -> AccuracyBound {
          const std::string k = r.get_choice("kernel", "certified", kKernels);
-         if (k == "mt")
-           return float_accuracy(0.5, 1e-3,
-                                 "Moller-Trumbore is not watertight: crossing rays through shared edges and vertices "
-                                 "may slip through (bound: 50% of edge/vertex-aimed crossing rays, 0.1% of other "
-                                 "crossing rays); touching, on-surface and ill-conditioned rays: no agreement claimed");
+         if (k == "mt") {
+           AccuracyBound b = float_accuracy(
+               0.5, 1e-3,
+               "Moller-Trumbore is not watertight: crossing rays through shared edges and vertices may slip through "
+               "(bound: 50% of edge/vertex-aimed crossing rays, 0.1% of other crossing rays); touching, on-surface and "
+               "ill-conditioned rays: no agreement claimed");
+           b.kernel = "mt";
+           return b;
+         }
          if (k == "exact") return exact_accuracy("exact kernel");
-         if (k == "certified") return exact_accuracy("certified kernel");
+         if (k == "certified") return certified_accuracy("certified kernel");
          return watertight_accuracy("watertight kernel");
        },
        {"kernel=mt", "kernel=exact", "kernel=watertight"}});
@@ -223,11 +227,13 @@ AccuracyBound float_accuracy(double crossing_features, double crossing_other, st
 }
 
 AccuracyBound watertight_accuracy(const std::string& how) {
-  return float_accuracy(0.0, 0.0,
+  AccuracyBound b = float_accuracy(0.0, 0.0,
                         "crossing rays: exact agreement (" + how +
                             "), at shared edges and vertices of closed and open meshes alike; touching, on-surface and "
                             "ill-conditioned rays: decided by float rounding, no agreement claimed (measured in the "
                             "report)");
+  b.kernel = "watertight";
+  return b;
 }
 
 AccuracyBound exact_accuracy(const std::string& how) {
@@ -235,11 +241,18 @@ AccuracyBound exact_accuracy(const std::string& how) {
   b.exact = true;
   b.statement = "every class (crossing, touching, on-surface, ill-conditioned): the exact oracle's first hit (" + how +
                 "): the same primitive, or one at the same exact t";
+  b.kernel = "exact";
+  return b;
+}
+
+AccuracyBound certified_accuracy(const std::string& how) {
+  AccuracyBound b = exact_accuracy(how);
+  b.kernel = "certified";
   return b;
 }
 
 AccuracyBound kernel_accuracy(KernelChoice kernel, const std::string& how) {
-  if (kernel == KernelChoice::certified) return exact_accuracy("certified kernel, conservative traversal");
+  if (kernel == KernelChoice::certified) return certified_accuracy("certified kernel, conservative traversal");
   return watertight_accuracy("watertight kernel, " + how);
 }
 

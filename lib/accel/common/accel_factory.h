@@ -49,6 +49,9 @@ struct AccuracyBound {
   double on_surface = 0.0;
   double ill_conditioned = 0.0;
   bool exact = false;     ///< held to the exact rule (compare_hits_exact) in every bucket
+  /// The ray/primitive kernel the method runs: certified, watertight, mt or exact; empty for a
+  /// method that runs another library's (Embree).
+  std::string kernel;
   std::string statement;  ///< one sentence per class for listings and the report
 
   double max_mismatch_rate(RayBucket bucket, bool feature_rays) const;
@@ -66,8 +69,10 @@ AccuracyBound float_accuracy(double crossing_features, double crossing_other, st
 /// The bound of a watertight float kernel with conservative traversal; `how` names them, e.g.
 /// "watertight kernel, conservative placement and traversal".
 AccuracyBound watertight_accuracy(const std::string& how);
-/// The bound of the exact and certified kernels: 0 everywhere, by the exact rule.
+/// The bound of the exact kernel: 0 everywhere, by the exact rule.
 AccuracyBound exact_accuracy(const std::string& how);
+/// The same bound, for the certified kernel.
+AccuracyBound certified_accuracy(const std::string& how);
 /// watertight_accuracy(how) or, for kernel=certified, exact_accuracy of the certified kernel.
 AccuracyBound kernel_accuracy(KernelChoice kernel, const std::string& how);
 

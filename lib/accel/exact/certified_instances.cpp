@@ -253,7 +253,7 @@ AccelKind make_certified_instances_kind() {
           [](std::shared_ptr<const Scene> scene, SpecReader&, const BuildContext&) -> std::unique_ptr<Aggregate> {
             return std::make_unique<CertifiedInstances>(std::move(scene));
           },
-          [](SpecReader&) { return exact_accuracy("certified kernel on the flat copy's world vertices, conservative world boxes"); }};
+          [](SpecReader&) { return certified_accuracy("certified kernel on the flat copy's world vertices, conservative world boxes"); }};
 }
 
 const AccelRegistration certified_instances_registration(make_certified_instances_kind(), 75);

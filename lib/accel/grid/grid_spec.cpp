@@ -34,10 +34,13 @@ GridConfig read_grid_config(SpecReader& r) {
 }
 
 AccuracyBound grid_accuracy(const GridConfig& c) {
-  if (c.acceptance == GridAcceptance::first)
-    return float_accuracy(1.0, 1.0,
-                          "accept=first is the lecture's mistake: a hit found in a cell may lie beyond it, behind a "
-                          "closer hit in a later cell; no agreement is claimed");
+  if (c.acceptance == GridAcceptance::first) {
+    AccuracyBound b = float_accuracy(1.0, 1.0,
+                                     "accept=first is the lecture's mistake: a hit found in a cell may lie beyond it, "
+                                     "behind a closer hit in a later cell; no agreement is claimed");
+    b.kernel = "watertight";  // the only kernel accept=first allows
+    return b;
+  }
   return kernel_accuracy(c.kernel, "in-cell acceptance");
 }
 
