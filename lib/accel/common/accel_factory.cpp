@@ -228,10 +228,10 @@ AccuracyBound float_accuracy(double crossing_features, double crossing_other, st
 
 AccuracyBound watertight_accuracy(const std::string& how) {
   AccuracyBound b = float_accuracy(0.0, 0.0,
-                        "crossing rays: exact agreement (" + how +
-                            "), at shared edges and vertices of closed and open meshes alike; touching, on-surface and "
-                            "ill-conditioned rays: decided by float rounding, no agreement claimed (measured in the "
-                            "report)");
+                                   "crossing rays: exact agreement (" + how +
+                                       "), at shared edges and vertices of closed and open meshes alike; touching, "
+                                       "on-surface and ill-conditioned rays: decided by float rounding, no agreement "
+                                       "claimed (measured in the report)");
   b.kernel = "watertight";
   return b;
 }

@@ -73,7 +73,7 @@ AccuracyBound watertight_accuracy(const std::string& how);
 AccuracyBound exact_accuracy(const std::string& how);
 /// The same bound, for the certified kernel.
 AccuracyBound certified_accuracy(const std::string& how);
-/// watertight_accuracy(how) or, for kernel=certified, exact_accuracy of the certified kernel.
+/// watertight_accuracy(how) or, for kernel=certified, certified_accuracy.
 AccuracyBound kernel_accuracy(KernelChoice kernel, const std::string& how);
 
 struct AccelKind {
