@@ -82,8 +82,7 @@ BuildTime timed_build(const std::string& spec, const std::shared_ptr<const Scene
 void BM_Build(benchmark::State& state, const std::string& scene_spec, const std::string& ours_spec,
               const std::string& embree_spec, int threads) {
   const auto scene = scene_for(scene_spec);
-  const std::string ours_full = ours_spec + (ours_spec.find(':') == std::string::npos ? ":" : ",") +
-                                "threads=" + std::to_string(threads);
+  const std::string ours_full = with_param(ours_spec, "threads=" + std::to_string(threads));
   std::unique_ptr<Aggregate> ours, theirs;
   BuildTime ours_t, theirs_t;
   for (auto _ : state) {

@@ -22,6 +22,7 @@
 #include "cost/fit.h"
 #include "scene/primitive.h"
 #include "geometry/input_error.h"
+#include "geometry/spec_string.h"
 
 namespace raylab::experiments {
 
@@ -203,12 +204,6 @@ struct Verdict {
   Threshold threshold = {};    ///< the rule, stated before the measurement
   std::string command = {};    ///< the command that reproduces this claim alone
 };
-
-/// `spec` with one more parameter `key_value` ("key=value"): `bvh` -> `bvh:key=value`,
-/// `bvh:width=4` -> `bvh:width=4,key=value`.
-inline std::string with_param(const std::string& spec, const std::string& key_value) {
-  return spec + (spec.find(':') == std::string::npos ? ":" : ",") + key_value;
-}
 
 /// The line that opens a section with an anchor the summary table links to.
 inline std::string section_anchor(const std::string& id) { return "<a id=\"" + id + "\"></a>\n\n"; }

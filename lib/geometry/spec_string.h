@@ -24,6 +24,12 @@ struct SpecString {
 /// repeated keys.
 SpecString parse_spec(std::string_view text);
 
+/// `spec` with one more item `key_value` ("key=value"): `bvh` -> `bvh:key=value`,
+/// `bvh:width=4` -> `bvh:width=4,key=value`.
+inline std::string with_param(const std::string& spec, const std::string& key_value) {
+  return spec + (spec.find(':') == std::string::npos ? ":" : ",") + key_value;
+}
+
 /// Documentation of one parameter, for listings and error messages.
 struct ParamDoc {
   std::string key;

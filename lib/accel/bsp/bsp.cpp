@@ -60,11 +60,7 @@ AccelKind make_bsp_kind() {
            {"leaf_size", "4", "nodes with at most this many primitives become leaves"},
            {"max_depth", "0", "safety depth limit; 0 = 6 + 1.3 log2 N, at most 48"},
            kernel_param_doc()},
-          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
-            BspConfig c = read_bsp_config(r);
-            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
-            return make_bsp(std::move(scene), c);
-          },
+          build_with_fitted_cost(read_bsp_config, make_bsp),
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_bsp_config(r).kernel, "exact classification, error-bounded traversal");
           },

@@ -113,11 +113,7 @@ AccelKind make_bvh_kind() {
   return {"bvh",
           "BVH: midpoint/median/sweep-SAH/binned-SAH/SBVH builders, near-first stack traversal",
           bvh_params(),
-          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
-            BvhConfig c = read_bvh_config(r);
-            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
-            return make_bvh(std::move(scene), c);
-          },
+          build_with_fitted_cost(read_bvh_config, make_bvh),
           [](SpecReader& r) -> AccuracyBound {
             const BvhConfig c = read_bvh_config(r);
             if (c.robust) return kernel_accuracy(c.kernel, "Ize's conservative box test");

@@ -90,6 +90,18 @@ struct AccelKind {
   std::vector<std::string> oracle_variants = {};
 };
 
+/// AccelKind::build for a builder whose config carries a `cost=` request (`fitted_cost`) and the
+/// SAH constants it sets (`cost`): reads the config, resolves the request through the build
+/// context for the scene's primitive count (apply_fitted_cost), and builds with `make`.
+template <class ReadConfig, class Make>
+auto build_with_fitted_cost(ReadConfig read_config, Make make) {
+  return [read_config, make](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
+    auto config = read_config(r);
+    apply_fitted_cost(config.fitted_cost, context, scene->total_primitive_count(), config.cost);
+    return make(std::move(scene), config);
+  };
+}
+
 /// For an instanced scene (scene.h): builds `make(base)` once per base and places it under each
 /// of its instances' transforms (TransformedPrimitive), plus `make` on the flat geometry (a copy,
 /// Scene::flat_part) when there is any, all in a BVH top level (accel/bvh/primitive_bvh.h: binned

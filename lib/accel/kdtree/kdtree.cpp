@@ -82,11 +82,7 @@ AccelKind make_kdtree_kind() {
   return {"kdtree",
           "kd-tree: midpoint/median/SAH builders, sort or event sweep, exact split clipping",
           kdtree_params(),
-          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
-            KdTreeConfig c = read_kdtree_config(r);
-            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
-            return make_kdtree(std::move(scene), c);
-          },
+          build_with_fitted_cost(read_kdtree_config, make_kdtree),
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_kdtree_config(r).kernel, "conservative placement and traversal");
           },

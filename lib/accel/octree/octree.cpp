@@ -63,11 +63,7 @@ AccelKind make_octree_kind() {
             "stack (iterative, crossings ordered per node) | revelles (parametric, Revelles et al. 2000) | kd (centre "
             "planes as three kd-tree splits)"},
            kernel_param_doc()},
-          [](std::shared_ptr<const Scene> scene, SpecReader& r, const BuildContext& context) {
-            OctreeConfig c = read_octree_config(r);
-            apply_fitted_cost(c.fitted_cost, context, scene->total_primitive_count(), c.cost);
-            return make_octree(std::move(scene), c);
-          },
+          build_with_fitted_cost(read_octree_config, make_octree),
           [](SpecReader& r) -> AccuracyBound {
             return kernel_accuracy(read_octree_config(r).kernel, "conservative placement and traversal");
           },
