@@ -313,8 +313,8 @@ struct CertifiedKernel {
   /// The exact t at which the line meets the triangle's plane, t = (p0 - o)·n / (d·n) with
   /// n = (p1 - p0) × (p2 - p0), enclosed in `t` from the two determinants evaluated in double
   /// with a static error bound (Shewchuk 1997's orient3d filter); false, with `t` unset, when
-  /// d·n is not surely non-zero or a bound overflows. The enclosure's width is about 2^-49 of the
-  /// determinants' magnitudes, not of the triangle's depth extent as plane_t's: a ray that starts
+  /// d·n is not surely non-zero or a bound overflows. Its width is relative to the determinants'
+  /// permanents (2^-49 of them), not to the triangle's depth extent as plane_t's: a ray that starts
   /// on a triangle, offset a few hundred ulps off it (Wächter and Binder, Ray Tracing Gems 2019,
   /// ch. 6), meets that triangle's plane just before its origin (or just after it, a shadow ray
   /// toward a light behind the surface), and this enclosure says on which side where plane_t's
