@@ -31,8 +31,7 @@ inline std::vector<std::string> accelerator_specs_from_env(const char* variable,
     if (specs.empty()) throw InputError("no accelerator spec");
     const auto probe = make_scene("sphere:n=20");
     // cost= models are read and checked, but the probe's size is not held to their fitted range.
-    BuildContext context;
-    context.fitted_costs = [](const FittedCostRequest& r, double) { return load_builder_costs(r.model, r.family); };
+    const BuildContext context = model_build_context(/*warn_outside_range=*/false);
     for (const auto& spec : specs) make_accelerator(spec, probe, context);
   } catch (const InputError& e) {
     std::cerr << "error: $" << variable << ": " << e.what() << "\n";

@@ -352,15 +352,15 @@ FittedSahCost load_builder_costs(const std::string& path, const std::string& fam
   return usable_builder_costs(set->family(family), resolved, family);
 }
 
-BuildContext model_build_context() {
+BuildContext model_build_context(bool warn_outside_range) {
   BuildContext context;
-  context.fitted_costs = [](const FittedCostRequest& request, double primitives) {
+  context.fitted_costs = [warn_outside_range](const FittedCostRequest& request, double primitives) {
     // One read of the model (load_model_file) for the constants and the range both.
     const std::string resolved = resolve_model_path(request.model);
     const std::shared_ptr<const CostModelSet> set = load_model_file(resolved);
     const FamilyModel& m = set->family(request.family);
     const FittedSahCost costs = usable_builder_costs(m, resolved, request.family);
-    if (const auto range = m.ranges.find("primitives"); range != m.ranges.end()) {
+    if (const auto range = m.ranges.find("primitives"); warn_outside_range && range != m.ranges.end()) {
       const FeatureRangeCheck check = check_feature_range("primitives", primitives, range->second);
       // Once per model file and family in a process: a sweep builds many structures.
       static std::mutex mutex;

@@ -44,8 +44,9 @@ FittedSahCost load_builder_costs(const std::string& path, const std::string& fam
 
 /// The build context that resolves the builders' `cost=MODEL` (fitted_cost.h) with
 /// load_builder_costs, for the tool, the sweeps, `auto` and the experiments to hand to
-/// make_accelerator. A scene outside the family's fitted range of primitives gets one warning
-/// on stderr per model and family (the model's own range check, model_fit.h), and the constants.
-BuildContext model_build_context();
+/// make_accelerator. With `warn_outside_range`, a scene outside the family's fitted range of
+/// primitives gets one warning on stderr per model and family (the model's own range check,
+/// model_fit.h), and the constants; without it (a probe build) the range is not checked.
+BuildContext model_build_context(bool warn_outside_range = true);
 
 }  // namespace raylab
