@@ -323,6 +323,8 @@ TEST(BadInputTool, NegativeCountsGiveOneErrorLine) {
       {"trace --scene sphere:n=64 --accel bvh:optimize_passes=-1", "optimize_passes"},
       {"trace --scene sphere:n=64 --accel bvh:optimize_budget=-1", "optimize_budget"},
       {"trace --scene sphere:n=64 --accel bvh:optimize=treelet", "optimize"},
+      {"trace --scene sphere:n=64 --accel bvh:nodes=compressed", "nodes"},
+      {"trace --scene sphere:n=64 --accel bvh:nodes=quantized,width=2", "nodes=quantized"},
   };
   fs::remove("/tmp/raylab_negative_threads.png");
   fs::remove("/tmp/raylab_negative_merge.csv");

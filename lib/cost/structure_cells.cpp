@@ -129,8 +129,8 @@ void walk_bvh2(const Bvh2& tree, const Visit& visit) {
 }
 
 /// The nodes of a wide BVH are references (WideRef): a leaf's names its packets.
-template <int N>
-void walk_wide_bvh(const WideBvh<N>& wide, const Visit& visit) {
+template <int N, class Node>
+void walk_wide_bvh(const WideBvh<N, Node>& wide, const Visit& visit) {
   depth_first(BoxItem{0, wide.root_box, 0}, [&](const BoxItem& it, std::vector<BoxItem>& stack) {
     if (WideRef::is_leaf(it.node)) {
       std::size_t prims = 0;
@@ -139,7 +139,7 @@ void walk_wide_bvh(const WideBvh<N>& wide, const Visit& visit) {
       visit(leaf_cell(it.box, prims, it.depth, WideRef::count(it.node)));  // one group per packet
       return;
     }
-    const WideBvhNode<N>& node = wide.nodes[it.node];
+    const Node& node = wide.nodes[it.node];
     if (!visit(box_cell(it.box, it.depth))) return;
     for (std::uint32_t i = 0; i < node.used; ++i) stack.push_back({node.child[i], node.box(static_cast<int>(i)), it.depth + 1});
   });
@@ -147,8 +147,9 @@ void walk_wide_bvh(const WideBvh<N>& wide, const Visit& visit) {
 
 void walk_bvh(const Bvh& bvh, const Visit& visit) {
   if (bvh.tree().nodes.empty()) throw InputError("structure cells: the BVH is empty");
-  if (bvh.config().width == 4) return walk_wide_bvh(bvh.wide4(), visit);
-  if (bvh.config().width == 8) return walk_wide_bvh(bvh.wide8(), visit);
+  const bool quantized = bvh.config().nodes == BvhNodes::quantized;
+  if (bvh.config().width == 4) return quantized ? walk_wide_bvh(bvh.quantized4(), visit) : walk_wide_bvh(bvh.wide4(), visit);
+  if (bvh.config().width == 8) return quantized ? walk_wide_bvh(bvh.quantized8(), visit) : walk_wide_bvh(bvh.wide8(), visit);
   walk_bvh2(bvh.tree(), visit);
 }
 

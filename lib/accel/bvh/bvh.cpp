@@ -11,11 +11,17 @@ namespace raylab {
 Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
     : scene_(std::move(scene)), config_(config), tree_(build_bvh(*scene_, config_)), bounds_(scene_->bounds()) {
   build_sah_cost_ = bvh_sah_cost(tree_, config_.cost);
-  if (config_.width == 4) wide4_ = collapse_bvh<4>(tree_, *scene_);
-  if (config_.width == 8) wide8_ = collapse_bvh<8>(tree_, *scene_);
+  const bool quantized = config_.nodes == BvhNodes::quantized;
+  if (config_.width == 4 && !quantized) wide4_ = collapse_bvh<4>(tree_, *scene_);
+  if (config_.width == 8 && !quantized) wide8_ = collapse_bvh<8>(tree_, *scene_);
+  if (config_.width == 4 && quantized) quantized4_ = quantize_wide_bvh(collapse_bvh<4>(tree_, *scene_));
+  if (config_.width == 8 && quantized) quantized8_ = quantize_wide_bvh(collapse_bvh<8>(tree_, *scene_));
 }
 
 AccelStats Bvh::stats() const {
+  const bool quantized = config_.nodes == BvhNodes::quantized;
+  if (config_.width == 4 && quantized) return {quantized4_.bytes(), quantized4_.nodes.size(), build_sah_cost_};
+  if (config_.width == 8 && quantized) return {quantized8_.bytes(), quantized8_.nodes.size(), build_sah_cost_};
   if (config_.width == 4) return {wide4_.bytes(), wide4_.nodes.size(), build_sah_cost_};
   if (config_.width == 8) return {wide8_.bytes(), wide8_.nodes.size(), build_sah_cost_};
   return {tree_.nodes.size() * sizeof(Bvh2Node) + tree_.prims.size() * sizeof(std::uint32_t), tree_.nodes.size(),
@@ -31,6 +37,7 @@ namespace {
 const std::vector<std::string> kBuilders = {"midpoint", "median", "sweep", "binned", "spatial"};
 const std::vector<std::string> kWidths = {"2", "4", "8"};
 const std::vector<std::string> kOptimizations = {"none", "reinsert"};
+const std::vector<std::string> kNodeKinds = {"full", "quantized"};
 
 std::vector<ParamDoc> bvh_params() {
   return {{"builder", "binned",
@@ -43,6 +50,9 @@ std::vector<ParamDoc> bvh_params() {
           {"alpha", "1e-5", "SBVH: try spatial splits where child overlap exceeds alpha * SA(root)"},
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
           {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
+          {"nodes", "full",
+           "full (float child boxes) | quantized (8-bit child boxes relative to the node's, enlarged outward: "
+           "half the node bytes, same first hits; width 4 or 8)"},
           {"robust", "on",
            "on: Ize's conservative box test + `kernel` | off: the fast variant (plain slab test, Moller-Trumbore)"},
           kernel_param_doc("certified (robust=on), watertight (robust=off)"),
@@ -86,6 +96,9 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.cost.leaf_block = c.width == 2 ? 1u : static_cast<unsigned>(kPacketWidth);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
+  c.nodes = r.get_choice("nodes", "full", kNodeKinds) == "quantized" ? BvhNodes::quantized : BvhNodes::full;
+  if (c.nodes == BvhNodes::quantized && c.width == 2)
+    throw InputError("accelerator '" + r.spec().text + "': nodes=quantized needs a wide tree (width=4 or 8)");
   c.robust = r.get_bool("robust", true);
   c.kernel = read_kernel_choice(r, c.robust ? KernelChoice::certified : KernelChoice::watertight);
   if (c.kernel == KernelChoice::certified && !c.robust)
@@ -128,7 +141,8 @@ AccelKind make_bvh_kind() {
           {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
            "builder=sweep", "cost=default", "width=2,cost=default", "kernel=watertight", "kernel=watertight,width=4",
-           "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2"}};
+           "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2", "nodes=quantized", "nodes=quantized,width=4,robust=off",
+           "nodes=quantized,kernel=watertight"}};
 }
 
 namespace {

@@ -11,6 +11,7 @@
 #include "accel/bvh/bvh_build.h"
 #include "accel/bvh/bvh_traversal.h"
 #include "accel/bvh/packed_triangles_simd.h"
+#include "accel/bvh/quantized_wide_node.h"
 #include "accel/bvh/wide_bvh_traversal.h"
 #include "accel/common/accel_factory.h"
 #include "scene/scene_primitives.h"
@@ -28,9 +29,12 @@ class Bvh final : public AggregateBase<Bvh> {
   std::optional<std::uint64_t> structure_hash() const override;
 
   const Bvh2& tree() const { return tree_; }
-  /// The traversed wide trees: filled only when config().width is 4 or 8 respectively.
+  /// The traversed wide trees: filled only when config().width is 4 or 8 respectively, and
+  /// config().nodes is full (wide4, wide8) or quantized (quantized4, quantized8).
   const WideBvh<4>& wide4() const { return wide4_; }
   const WideBvh<8>& wide8() const { return wide8_; }
+  const QuantizedWideBvh<4>& quantized4() const { return quantized4_; }
+  const QuantizedWideBvh<8>& quantized8() const { return quantized8_; }
   const BvhConfig& config() const { return config_; }
 
   template <class Counters>
@@ -56,8 +60,12 @@ class Bvh final : public AggregateBase<Bvh> {
   template <class Kernel, bool kRobust, bool kAnyHit, class Counters>
   bool trace(const Ray& ray, Hit& hit, Counters& counters) const {
     if (tree_.nodes.empty()) return false;
-    if (config_.width == 8) return trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
-    if (config_.width == 4) return trace_wide<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
+    if (config_.width == 8)
+      return config_.nodes == BvhNodes::quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized8_, ray, hit, counters)
+                                                  : trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
+    if (config_.width == 4)
+      return config_.nodes == BvhNodes::quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized4_, ray, hit, counters)
+                                                  : trace_wide<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
     typename Kernel::Context ctx = Kernel::prepare(ray);
     const Scene& scene = *scene_;
     const std::uint32_t* prims = tree_.prims.data();
@@ -76,8 +84,8 @@ class Bvh final : public AggregateBase<Bvh> {
         });
   }
 
-  template <class Kernel, bool kRobust, bool kAnyHit, int N, class Counters>
-  bool trace_wide(const WideBvh<N>& wide, const Ray& ray, Hit& hit, Counters& counters) const {
+  template <class Kernel, bool kRobust, bool kAnyHit, int N, class Node, class Counters>
+  bool trace_wide(const WideBvh<N, Node>& wide, const Ray& ray, Hit& hit, Counters& counters) const {
     // For closest-hit queries the kernel's per-ray setup (three divisions for the watertight
     // shear) waits for the first leaf: many rays (diffuse rays leaving a convex part) reach none.
     // Shadow rays mostly do, and measure faster with the setup done up front.
@@ -108,8 +116,10 @@ class Bvh final : public AggregateBase<Bvh> {
   std::shared_ptr<const Scene> scene_;
   BvhConfig config_;
   Bvh2 tree_;
-  WideBvh<4> wide4_;  ///< filled when config_.width == 4
-  WideBvh<8> wide8_;  ///< filled when config_.width == 8
+  WideBvh<4> wide4_;  ///< filled when config_.width == 4 and config_.nodes is full
+  WideBvh<8> wide8_;  ///< filled when config_.width == 8 and config_.nodes is full
+  QuantizedWideBvh<4> quantized4_;  ///< filled when config_.width == 4 and config_.nodes is quantized
+  QuantizedWideBvh<8> quantized8_;  ///< filled when config_.width == 8 and config_.nodes is quantized
   Bounds3f bounds_;
   double build_sah_cost_ = 0.0;
 };

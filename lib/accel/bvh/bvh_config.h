@@ -22,6 +22,12 @@ enum class BvhOptimize {
   reinsert,  ///< reinsertion (Bittner, Hapala and Havran 2013) under `cost`
 };
 
+/// How a wide tree stores its child boxes.
+enum class BvhNodes {
+  full,       ///< float boxes (WideBvhNode)
+  quantized,  ///< 8-bit boxes relative to the node's own, enlarged outward (quantized_wide_node.h)
+};
+
 /// The SAH of a BVH (MacDonald and Booth 1990; the lecture's Cost = N_A·S_A + N_B·S_B):
 ///   node cost = c_trav + c_isect·(N_A·SA(A) + N_B·SA(B)) / SA(node),   leaf cost = c_isect·N,
 /// where a count N is rounded up to whole blocks of `leaf_block` primitives (bvh_leaf_units).
@@ -66,6 +72,8 @@ struct BvhConfig {
   /// Optimisation wall time at most, in seconds, checked between passes; 0 gives no limit (a
   /// limit makes the tree depend on the machine's speed).
   double optimize_budget = 0.0;
+  /// Child boxes of the wide tree (width 4 or 8).
+  BvhNodes nodes = BvhNodes::full;
   /// Ize's conservative slab test and `kernel`; off gives the `fast` variant (plain slab test,
   /// Moller-Trumbore, whatever `kernel` says), held by the oracle suite to its stated bound.
   bool robust = true;

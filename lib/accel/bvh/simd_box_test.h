@@ -14,10 +14,15 @@
 ///    reproduce intersect_box's branches, NaN (0·inf) lanes included.
 ///  - WideBoxRay<N, false>: the fast slab test, near/far planes chosen by the direction's signs,
 ///    t = bound·inv - org·inv fused; may reject a box the ray touches within rounding.
+///
+/// Both read a node's planes as floats: a quantized node's (quantized_wide_node.h) are
+/// dequantized first, and its boxes enclose the full node's, so both tests keep every child the
+/// full node's test keeps, with an entry no later (monotone in the planes).
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "accel/bvh/quantized_wide_node.h"
 #include "accel/bvh/simd.h"
 #include "accel/bvh/wide_bvh.h"
 #include "geometry/bounds.h"
@@ -27,6 +32,23 @@ namespace raylab {
 /// intersect_box's far-distance factor, 1 + 2γ(3).
 inline constexpr float kIzeFarScale = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
                                                  (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
+
+/// Plane `p` of a node's N child boxes (0..2: lower x, y, z; 3..5: upper), `a` = p mod 3.
+template <int N>
+[[gnu::always_inline]] inline simd::Float<N> child_planes(const WideBvhNode<N>& node, int p, int /*a*/) {
+  return simd::Float<N>::load(node.bounds[p]);
+}
+template <int N>
+[[gnu::always_inline]] inline simd::Float<N> child_planes(const QuantizedWideBvhNode<N>& node, int p, int a) {
+  using F = simd::Float<N>;
+  return fmadd(F::from_bytes(node.q[p]), F::broadcast(node.step[a]), F::broadcast(node.origin[a]));  // = dequantize
+}
+
+/// Whether a node's unused lanes hold empty boxes (+inf, -inf) that every fused test misses.
+template <class Node>
+inline constexpr bool kUnusedLanesMiss = true;
+template <int N>
+inline constexpr bool kUnusedLanesMiss<QuantizedWideBvhNode<N>> = false;
 
 template <int N, bool kRobust>
 struct WideBoxRay;
@@ -76,21 +98,22 @@ struct WideBoxRay<N, true> {
     }
   }
 
-  /// Bit i set when child i of `node` is hit on [tmin, tmax]; entry distances go to `entry`
-  /// (32-byte aligned).
-  [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
-    const float (*bounds)[N] = node.bounds;
+  /// Bit i set when child i of `node` (a WideBvhNode<N> or QuantizedWideBvhNode<N>) is hit on
+  /// [tmin, tmax]; entry distances go to `entry` (32-byte aligned).
+  template <class Node>
+  [[gnu::always_inline]] unsigned hit(const Node& node, float tmax, float* entry) const {
     if (fused) {
       // No component of the direction is zero: the planes are chosen by the sign of inv, and no
       // distance is NaN. An empty lane (+inf, -inf) gives near = +inf, far = -inf and misses.
       F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
       for (int a = 0; a < 3; ++a) {
-        t0 = max(fmsub(F::load(bounds[near[a]]), inv[a], org_inv_near[a]), t0);
-        far_min = min(fmsub(F::load(bounds[far[a]]), inv[a], org_inv_far[a]), far_min);
+        t0 = max(fmsub(child_planes(node, near[a], a), inv[a], org_inv_near[a]), t0);
+        far_min = min(fmsub(child_planes(node, far[a], a), inv[a], org_inv_far[a]), far_min);
       }
       const F t1 = min(far_min * F::broadcast(kIzeFarScale), F::broadcast(tmax));
       t0.store(entry);
-      return t0 <= t1;
+      if constexpr (kUnusedLanesMiss<Node>) return t0 <= t1;
+      return (t0 <= t1) & ((1u << node.used) - 1);
     }
     // intersect_box scales each far distance and takes min(far·s, t1) per axis; rounding is
     // monotone, so min over axes of far·s equals (min over axes of far)·s, NaN lanes skipped
@@ -98,8 +121,8 @@ struct WideBoxRay<N, true> {
     F t0 = F::broadcast(tmin), far_min = F::broadcast(std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a) {
       const F o = F::broadcast(org[a]);
-      const F tn = (F::load(bounds[a]) - o) * inv[a];
-      const F tf = (F::load(bounds[3 + a]) - o) * inv[a];
+      const F tn = (child_planes(node, a, a) - o) * inv[a];
+      const F tf = (child_planes(node, 3 + a, a) - o) * inv[a];
       t0 = max(min(tf, tn), t0);        // near = tn > tf ? tf : tn; near > t0 ? near : t0 (NaN keeps t0)
       far_min = min(max(tn, tf), far_min);  // far = tn > tf ? tn : tf; NaN keeps the running minimum
     }
@@ -129,12 +152,12 @@ struct WideBoxRay<N, false> {
 
   /// As the robust test. Empty lanes (+inf, -inf) give near = +inf > far, except where an
   /// inverse flushed to 0 (|d| > 2^126 under FTZ) makes them NaN: the result is masked by `used`.
-  [[gnu::always_inline]] unsigned hit(const WideBvhNode<N>& node, float tmax, float* entry) const {
-    const float (*bounds)[N] = node.bounds;
+  template <class Node>
+  [[gnu::always_inline]] unsigned hit(const Node& node, float tmax, float* entry) const {
     F t0 = F::broadcast(tmin), t1 = F::broadcast(tmax);
     for (int a = 0; a < 3; ++a) {
-      t0 = max(fmsub(F::load(bounds[near[a]]), inv[a], org_inv[a]), t0);
-      t1 = min(fmsub(F::load(bounds[far[a]]), inv[a], org_inv[a]), t1);
+      t0 = max(fmsub(child_planes(node, near[a], a), inv[a], org_inv[a]), t0);
+      t1 = min(fmsub(child_planes(node, far[a], a), inv[a], org_inv[a]), t1);
     }
     t0.store(entry);
     return (t0 <= t1) & ((1u << node.used) - 1);

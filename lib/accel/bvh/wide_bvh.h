@@ -53,15 +53,14 @@ struct alignas(64) WideBvhNode {
 static_assert(sizeof(WideBvhNode<4>) == 128);
 static_assert(sizeof(WideBvhNode<8>) == 256);
 
-template <int N>
+/// Nodes of type `Node`: WideBvhNode<N>, or QuantizedWideBvhNode<N> (quantized_wide_node.h).
+template <int N, class Node = WideBvhNode<N>>
 struct WideBvh {
-  std::vector<WideBvhNode<N>> nodes;  ///< node 0 is the root (always interior, >= 1 child)
+  std::vector<Node> nodes;  ///< node 0 is the root (always interior, >= 1 child)
   std::vector<TrianglePacket> packets;
   Bounds3f root_box;
 
-  std::size_t bytes() const {
-    return nodes.size() * sizeof(WideBvhNode<N>) + packets.size() * sizeof(TrianglePacket);
-  }
+  std::size_t bytes() const { return nodes.size() * sizeof(Node) + packets.size() * sizeof(TrianglePacket); }
 };
 
 /// Collapses `tree` (built over `scene`, which must not be instanced) into an N-wide BVH whose

@@ -15,19 +15,19 @@
 namespace raylab {
 
 /// Prefetches the cache lines of the interior node `ref` (leaves are left to the leaf test).
-template <int N>
-[[gnu::always_inline]] inline void prefetch_node(const WideBvhNode<N>* nodes, std::uint32_t ref) {
+template <class Node>
+[[gnu::always_inline]] inline void prefetch_node(const Node* nodes, std::uint32_t ref) {
   if (WideRef::is_leaf(ref)) return;
   const char* p = reinterpret_cast<const char*>(nodes + ref);
-  for (std::size_t line = 0; line < sizeof(WideBvhNode<N>); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+  for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
 }
 
-/// Traverses `nodes` (root 0). `closest` is the current closest-hit distance, which
-/// `leaf(first_packet, packet_count, closest)` lowers when it finds a hit and reports by
-/// returning true. Returns whether any leaf reported a hit; with kAnyHit the first report ends
+/// Traverses `nodes` (root 0; WideBvhNode<N> or QuantizedWideBvhNode<N>). `closest` is the
+/// current closest-hit distance, which `leaf(first_packet, packet_count, closest)` lowers when it
+/// finds a hit and reports by returning true. Returns whether any leaf reported a hit; with kAnyHit the first report ends
 /// traversal.
-template <int N, bool kRobust, bool kAnyHit, class Counters, class LeafFn>
-bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& closest_out, Counters& counters,
+template <int N, bool kRobust, bool kAnyHit, class Node, class Counters, class LeafFn>
+bool traverse_wide_bvh(const Node* nodes, const Ray& ray, float& closest_out, Counters& counters,
                        LeafFn&& leaf) {
   const WideBoxRay<N, kRobust> r(ray);
   float closest = closest_out;  // a register copy: the stack stores cannot alias it
@@ -43,7 +43,7 @@ bool traverse_wide_bvh(const WideBvhNode<N>* nodes, const Ray& ray, float& close
   alignas(32) float entry[N];
   for (;;) {
     if (!WideRef::is_leaf(ref)) {
-      const WideBvhNode<N>& node = nodes[ref];
+      const Node& node = nodes[ref];
       counters.node();
       unsigned mask = r.hit(node, closest, entry);
       // Incoherent rays miss the caches on most node loads: start every hit child's lines now,
