@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,19 +15,27 @@
 
 namespace raylab {
 
+/// The ';'-separated items of $`variable` (empty items dropped); nullopt when it is unset or empty.
+inline std::optional<std::vector<std::string>> list_from_env(const char* variable) {
+  const char* env = std::getenv(variable);
+  if (env == nullptr || *env == '\0') return std::nullopt;
+  std::vector<std::string> items;
+  const std::string text(env);
+  for (std::size_t start = 0; start <= text.size();) {
+    const std::size_t end = std::min(text.find(';', start), text.size());
+    if (end > start) items.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  return items;
+}
+
 /// The ';'-separated accelerator specs in $`variable`, or `fallback` when it is unset or empty.
 /// Each is built once over a 20-triangle sphere first: a spec the factory rejects ends the program
 /// with one `error:` line naming the variable, and exit status 2.
 inline std::vector<std::string> accelerator_specs_from_env(const char* variable, std::vector<std::string> fallback) {
-  const char* env = std::getenv(variable);
-  if (env == nullptr || *env == '\0') return fallback;
-  std::vector<std::string> specs;
-  const std::string text(env);
-  for (std::size_t start = 0; start <= text.size();) {
-    const std::size_t end = std::min(text.find(';', start), text.size());
-    if (end > start) specs.push_back(text.substr(start, end - start));
-    start = end + 1;
-  }
+  const std::optional<std::vector<std::string>> listed = list_from_env(variable);
+  if (!listed) return fallback;
+  const std::vector<std::string>& specs = *listed;
   try {
     if (specs.empty()) throw InputError("no accelerator spec");
     const auto probe = make_scene("sphere:n=20");

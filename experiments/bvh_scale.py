@@ -29,6 +29,58 @@ def median_interval(values):
     return float(np.median(v)), float(np.quantile(medians, 0.025)), float(np.quantile(medians, 0.975))
 
 
+def quantized_twin(accel: str) -> str:
+    """The spec of `accel` with quantized nodes (`bvh` -> `bvh:nodes=quantized`, `bvh:robust=off` ->
+    `bvh:nodes=quantized,robust=off`)."""
+    kind, _, params = accel.partition(":")
+    return f"{kind}:nodes=quantized" + (f",{params}" if params else "")
+
+
+def memory_section(df: pd.DataFrame) -> list:
+    """Bytes per triangle and node visits per structure and scene, and, for every structure whose
+    quantized twin is in the data, the twin's time against it: the ratio of their Embree ratios,
+    measurement by measurement (both alternate with Embree on the same rays), median [95%]."""
+    if not {"bytes", "nodes_per_ray", "leaves_per_ray"} <= set(df.columns):
+        return []
+    md = ["", "## Memory and node visits", "",
+          "*bytes/tri*: the traversed structure (wide nodes and triangle packets) per triangle; *visits/ray*: "
+          "interior nodes + leaves per diffuse ray; *ns/visit*: diffuse ns/ray over visits/ray (the traversal's "
+          "time per visit, leaf tests included).", "",
+          "| scene | triangles | structure | bytes/tri | visits/ray | ns/visit |", "|---|---|---|---|---|---|"]
+    diffuse = df[df["ray_kind"] == "diffuse"]
+    for (scene, accel), g in sorted(diffuse.groupby(["scene", "accel"]), key=lambda k: (k[1]["primitives"].iloc[0], k[0][1])):
+        tris = int(g["primitives"].iloc[0])
+        visits = float(np.median(g["nodes_per_ray"] + g["leaves_per_ray"]))
+        ns = float(np.median(g["ns_per_ray_min"]))
+        md.append(f"| {scene} | {tris:.3g} | `{accel}` | {float(np.median(g['bytes'])) / tris:.1f} | {visits:.1f} | "
+                  f"{ns / visits:.1f} |")
+    pairs = [(a, quantized_twin(a)) for a in dict.fromkeys(df["accel"]) if quantized_twin(a) in set(df["accel"])]
+    if not pairs:
+        return md
+    md += ["", "### Quantized nodes against full nodes", "",
+           "Throughput of the quantized twin over the full-node structure's (> 1: quantized is faster), from their "
+           "ratios to Embree measurement by measurement, median [95%].", "",
+           "| scene | triangles | comparison | primary | diffuse | shadow | bytes/tri, quantized / full |",
+           "|---|---|---|---|---|---|---|"]
+    for full, quantized in pairs:
+        for scene, g in sorted(df.groupby("scene"), key=lambda k: k[1]["primitives"].iloc[0]):
+            cells = []
+            for kind in KINDS:
+                a = g[(g["accel"] == full) & (g["ray_kind"] == kind)].set_index("replicate")["ratio"]
+                b = g[(g["accel"] == quantized) & (g["ray_kind"] == kind)].set_index("replicate")["ratio"]
+                both = (b / a).dropna()
+                if both.empty:
+                    cells.append("–")
+                    continue
+                m, lo, hi = median_interval(both)
+                cells.append(f"{m:.2f} [{lo:.2f}, {hi:.2f}]")
+            bytes_full = float(np.median(g[g["accel"] == full]["bytes"]))
+            bytes_q = float(np.median(g[g["accel"] == quantized]["bytes"]))
+            md.append(f"| {scene} | {int(g['primitives'].iloc[0]):.3g} | `{quantized}` / `{full}` | " + " | ".join(cells) +
+                      f" | {bytes_q / bytes_full:.2f} |")
+    return md
+
+
 def main(runs_csv: str, out_dir: str) -> int:
     if not pathlib.Path(runs_csv).is_file():
         print(f"bvh_scale: {runs_csv}: no such file", file=sys.stderr)
@@ -121,6 +173,7 @@ def main(runs_csv: str, out_dir: str) -> int:
     for _, r in table.iterrows():
         md.append(f"| {r['scene']} | {r['triangles']:.3g} | `{r['accel']}` | {r['kind']} | {r['ns']:.0f} | "
                   f"{r['embree_ns']:.0f} | {r['ratio']:.2f} [{r['lo']:.2f}, {r['hi']:.2f}] | {r['n']} |")
+    md += memory_section(df)
     md += ["", f"Scenes: {len(scenes)}, {scenes.min():,} to {scenes.max():,} triangles. No scene of 10^7 triangles is "
            "in the plan: the sweep computes each case's tree features, whose end-point overlap takes minutes there.", ""]
     (out / "README.md").write_text("\n".join(md))
