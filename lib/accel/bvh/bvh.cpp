@@ -141,8 +141,8 @@ AccelKind make_bvh_kind() {
           {"width=2", "width=4", "robust=off", "width=2,robust=off", "width=4,robust=off",
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
            "builder=sweep", "cost=default", "width=2,cost=default", "kernel=watertight", "kernel=watertight,width=4",
-           "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2", "nodes=quantized", "nodes=quantized,width=4,robust=off",
-           "nodes=quantized,kernel=watertight"}};
+           "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2", "nodes=quantized",
+           "nodes=quantized,width=4,robust=off", "nodes=quantized,kernel=watertight"}};
 }
 
 namespace {

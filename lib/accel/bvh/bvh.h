@@ -60,12 +60,13 @@ class Bvh final : public AggregateBase<Bvh> {
   template <class Kernel, bool kRobust, bool kAnyHit, class Counters>
   bool trace(const Ray& ray, Hit& hit, Counters& counters) const {
     if (tree_.nodes.empty()) return false;
+    const bool quantized = config_.nodes == BvhNodes::quantized;
     if (config_.width == 8)
-      return config_.nodes == BvhNodes::quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized8_, ray, hit, counters)
-                                                  : trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
+      return quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized8_, ray, hit, counters)
+                       : trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
     if (config_.width == 4)
-      return config_.nodes == BvhNodes::quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized4_, ray, hit, counters)
-                                                  : trace_wide<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
+      return quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized4_, ray, hit, counters)
+                       : trace_wide<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
     typename Kernel::Context ctx = Kernel::prepare(ray);
     const Scene& scene = *scene_;
     const std::uint32_t* prims = tree_.prims.data();
