@@ -393,8 +393,10 @@ inline constexpr bool kPairedPackets = std::is_same_v<Kernel, WatertightKernel> 
 /// sphere packets, tested scalar) to Kernel in order; true when one of them became the closest
 /// hit (with kAnyHit: at the first hit). Two consecutive triangle packets go as one 8-lane test
 /// where the kernel has one (most leaves of the wide trees' default leaf sizes are 2 or 4 packets).
+/// Always inlined into the traversal loops: GCC's unit-growth limit otherwise leaves it out of
+/// line once a translation unit instantiates more traversals (it did for the quantized nodes).
 template <class Kernel, bool kAnyHit, class Counters>
-inline bool intersect_packed_leaf(const Scene& scene, typename Kernel::Context& ctx,
+[[gnu::always_inline]] inline bool intersect_packed_leaf(const Scene& scene, typename Kernel::Context& ctx,
                                   const typename PacketKernel<Kernel>::Ray& packet_ray, const TrianglePacket* packets,
                                   std::uint32_t count, Hit& hit, Counters& counters) {
   bool found = false;
