@@ -101,7 +101,7 @@ class Bvh final : public AggregateBase<Bvh> {
     const TrianglePacket* packets = wide.packets.data();
     float closest = initial_closest<Kernel>(ray);
     return traverse_wide_bvh<N, kRobust, kAnyHit>(
-        wide.nodes.data(), ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
+        wide.nodes.data(), packets, ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
           if (!prepared) {
             prepare_context<Kernel>(ctx, ray);  // ctx's closest is ray.tmax: no leaf has hit yet
             packet_ray = typename PacketKernel<Kernel>::Ray(ctx);

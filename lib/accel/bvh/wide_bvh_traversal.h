@@ -14,21 +14,25 @@
 
 namespace raylab {
 
-/// Prefetches the cache lines of the interior node `ref` (leaves are left to the leaf test).
+/// Prefetches the cache lines of child `ref`: an interior node's, or a leaf's first packet's (the
+/// leaf test reads the others after it).
 template <class Node>
-[[gnu::always_inline]] inline void prefetch_node(const Node* nodes, std::uint32_t ref) {
-  if (WideRef::is_leaf(ref)) return;
-  const char* p = reinterpret_cast<const char*>(nodes + ref);
-  for (std::size_t line = 0; line < sizeof(Node); line += 64) _mm_prefetch(p + line, _MM_HINT_T0);
+[[gnu::always_inline]] inline void prefetch_child(const Node* nodes, const TrianglePacket* packets, std::uint32_t ref) {
+  const char* p = WideRef::is_leaf(ref) ? reinterpret_cast<const char*>(packets + WideRef::first(ref))
+                                        : reinterpret_cast<const char*>(nodes + ref);
+  const std::size_t bytes = WideRef::is_leaf(ref) ? sizeof(TrianglePacket) : sizeof(Node);
+  for (std::size_t offset = 0; offset < bytes; offset += 64) _mm_prefetch(p + offset, _MM_HINT_T0);
+  _mm_prefetch(p + bytes - 1, _MM_HINT_T0);  // a packet is 16-byte aligned: it may reach one line further
 }
 
-/// Traverses `nodes` (root 0; WideBvhNode<N> or QuantizedWideBvhNode<N>). `closest` is the
+/// Traverses `nodes` (root 0; WideBvhNode<N> or QuantizedWideBvhNode<N>) whose leaves reference
+/// `packets`. `closest` is the
 /// current closest-hit distance, which `leaf(first_packet, packet_count, closest)` lowers when it
 /// finds a hit and reports by returning true. Returns whether any leaf reported a hit; with
 /// kAnyHit the first report ends traversal.
 template <int N, bool kRobust, bool kAnyHit, class Node, class Counters, class LeafFn>
-bool traverse_wide_bvh(const Node* nodes, const Ray& ray, float& closest_out, Counters& counters,
-                       LeafFn&& leaf) {
+bool traverse_wide_bvh(const Node* nodes, const TrianglePacket* packets, const Ray& ray, float& closest_out,
+                       Counters& counters, LeafFn&& leaf) {
   const WideBoxRay<N, kRobust> r(ray);
   float closest = closest_out;  // a register copy: the stack stores cannot alias it
   struct Entry {
@@ -47,8 +51,11 @@ bool traverse_wide_bvh(const Node* nodes, const Ray& ray, float& closest_out, Co
       counters.node();
       unsigned mask = r.hit(node, closest, entry);
       // Incoherent rays miss the caches on most node loads: start every hit child's lines now,
-      // so those of the children taken later arrive while the nearest one is traversed.
-      for (unsigned m = mask; m != 0; m &= m - 1) prefetch_node(nodes, node.child[std::countr_zero(m)]);
+      // so those of the children taken later arrive while the nearest one is traversed. Leaves
+      // too: at 10^6 triangles and more their packets miss as often (`raylab sweep`, with leaf
+      // prefetch against without, each against Embree in one process, 3 measurements: 1.02-1.08
+      // on 1.2·10^6 and 2.1·10^6 triangles, 1.00-1.02 on 7.5·10^4).
+      for (unsigned m = mask; m != 0; m &= m - 1) prefetch_child(nodes, packets, node.child[std::countr_zero(m)]);
       if (mask != 0) {
         const int i = std::countr_zero(mask);
         mask &= mask - 1;
