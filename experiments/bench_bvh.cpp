@@ -9,7 +9,7 @@
 //                        rays (rtcIntersect1 / rtcOccluded1 in a tight loop on the like-for-like
 //                        Embree's own RTCScene): the comparison without raylab's call path on
 //                        either side
-//      nodes, leaves, tests per ray (counted pass)
+//      nodes, leaves, tests per ray (counted pass); triangles, the scene's primitives
 //   build/experiments/bench_bvh --benchmark_min_time=0.1
 //   build/experiments/bench_bvh --benchmark_filter='armadillo/diffuse'
 //   RAYLAB_BENCH_BVH_SPECS='bvh;bvh:width=4' build/experiments/bench_bvh   (other specs, ';'-separated)
@@ -110,6 +110,7 @@ void BM_BvhTrace(benchmark::State& state, const std::string& scene_spec, const s
   state.counters["nodes"] = static_cast<double>(counted.counters.nodes) / n;
   state.counters["leaves"] = static_cast<double>(counted.counters.leaves) / n;
   state.counters["tests"] = static_cast<double>(counted.counters.prim_tests) / n;
+  state.counters["triangles"] = static_cast<double>(scene->total_primitive_count());
 }
 
 /// The scenes of $RAYLAB_BENCH_BVH_SCENES, each made up front (a spec make_scene rejects ends the

@@ -79,10 +79,11 @@ void check_quantized(const WideBvhNode<N>& node) {
 TEST(QuantizedWideNode, EveryChildBoxContainsItsFullBoxAtEveryScale) {
   std::mt19937 rng(11);
   // Centres and sizes: near the origin, 10^4 and 10^7 away with small boxes (the step then meets
-  // the origin's rounding), tiny (10^-30, near the subnormals), huge (10^37, near overflow), and
-  // boxes straddling 0.
-  const std::pair<float, float> scales[] = {{0.0f, 1.0f}, {1e4f, 1e-3f}, {-1e7f, 0.5f}, {1e4f, 1e-9f},
-                                            {0.0f, 1e-30f}, {1e-36f, 1e-37f}, {0.0f, 1e37f}, {-1e38f, 1e37f}};
+  // the origin's rounding), tiny (10^-30, near the subnormals, and subnormal), huge (10^37, near
+  // overflow), and boxes straddling 0.
+  const std::pair<float, float> scales[] = {{0.0f, 1.0f},    {1e4f, 1e-3f},    {-1e7f, 0.5f},   {1e4f, 1e-9f},
+                                            {0.0f, 1e-30f},  {1e-36f, 1e-37f}, {0.0f, 1e-39f},  {2e-38f, 1e-39f},
+                                            {0.0f, 1e37f},   {-1e38f, 1e37f}};
   for (const bool flush : {false, true}) {
     const FloatModeScope mode(flush);
     for (const auto& [centre, size] : scales)

@@ -1,6 +1,7 @@
 #include "accel/bvh/quantized_wide_node.h"
 
 #include "accel/common/huge_pages.h"
+#include "geometry/float_mode.h"
 
 #include <algorithm>
 #include <cmath>
@@ -42,6 +43,8 @@ int quantize_up(float hi, float step, float origin) {
 
 template <int N>
 QuantizedWideBvhNode<N> quantize_wide_node(const WideBvhNode<N>& node) {
+  // Under DAZ a subnormal bound would compare as 0: the planes are chosen against the real bounds.
+  const FloatModeScope ieee(false);
   QuantizedWideBvhNode<N> out{};
   out.used = node.used;
   for (int i = 0; i < N; ++i) out.child[i] = node.child[i];
