@@ -62,7 +62,8 @@ void check_quantized(const WideBvhNode<N>& node) {
     for (int i = 0; i < static_cast<int>(q.used); ++i) {
       const Bounds3f box = q.box(i);
       const float scalar = p < 3 ? box.lo[p] : box.hi[p - 3];
-      ASSERT_EQ(std::bit_cast<std::uint32_t>(planes[i]), std::bit_cast<std::uint32_t>(scalar)) << "plane " << p << " lane " << i;
+      ASSERT_EQ(std::bit_cast<std::uint32_t>(planes[i]), std::bit_cast<std::uint32_t>(scalar))
+          << "plane " << p << " lane " << i;
     }
   }
   for (int i = 0; i < static_cast<int>(q.used); ++i) {
@@ -88,7 +89,8 @@ TEST(QuantizedWideNode, EveryChildBoxContainsItsFullBoxAtEveryScale) {
     const FloatModeScope mode(flush);
     for (const auto& [centre, size] : scales)
       for (int trial = 0; trial < 300; ++trial) {
-        SCOPED_TRACE("centre " + std::to_string(centre) + " size " + std::to_string(size) + " flush " + std::to_string(flush));
+        SCOPED_TRACE("centre " + std::to_string(centre) + " size " + std::to_string(size) +
+                     " flush " + std::to_string(flush));
         check_quantized(random_node<8>(rng, 1 + trial % 8, centre, size));
         check_quantized(random_node<4>(rng, 1 + trial % 4, centre, size));
       }
@@ -110,7 +112,8 @@ void check_box_tests(std::mt19937& rng, float centre, float size) {
     for (int a = 0; a < 3; ++a)
       if (pick(rng) == 0) ray.dir[a] = pick(rng) < 5 ? 0.0f : -0.0f;  // the robust test's masked path
     if (ray.dir == Vec3f(0.0f)) ray.dir.x = 1.0f;
-    if (pick(rng) < 5) ray.org = full.box(trial % static_cast<int>(full.used)).center() - ray.dir * 2.0f * size;  // aimed
+    if (pick(rng) < 5)  // aimed at a child
+      ray.org = full.box(trial % static_cast<int>(full.used)).center() - ray.dir * 2.0f * size;
     const WideBoxRay<N, kRobust> test(ray);
     alignas(32) float entry_full[N], entry_q[N];
     const unsigned mask_full = test.hit(full, ray.tmax, entry_full);
@@ -140,7 +143,8 @@ TEST(QuantizedWideNode, BoxTestsKeepEveryChildTheFullNodeHitsNoLater) {
 /// The same first hits as full nodes: the same leaves, under boxes that only grew.
 TEST(QuantizedWideNode, BvhFindsTheFirstHitsOfFullNodes) {
   for (const char* spec : {"soup:n=3000", "walls:n=12,angle=30", "sphereflake:depth=1",
-                           "transformed:of=(sphere:n=2000),translate=1e4:-1e4:1e4", "transformed:of=(soup:n=2000),scale=1e-4"}) {
+                           "transformed:of=(sphere:n=2000),translate=1e4:-1e4:1e4",
+                           "transformed:of=(soup:n=2000),scale=1e-4"}) {
     const auto scene = make_scene(spec);
     const Bounds3f box = scene->bounds();
     for (const int width : {4, 8})

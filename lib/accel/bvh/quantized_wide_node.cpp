@@ -64,7 +64,8 @@ QuantizedWideBvhNode<N> quantize_wide_node(const WideBvhNode<N>& node) {
     // overflow in float); larger ones where rounding at the origin's magnitude leaves the top
     // plane short of some child's upper bound.
     const double extent = static_cast<double>(hi) - lo;
-    int e = extent > 0.0 ? std::max(kMinStepExponent, static_cast<int>(std::ceil(std::log2(extent / 255.0)))) : kMinStepExponent;
+    int e = kMinStepExponent;
+    if (extent > 0.0) e = std::max(e, static_cast<int>(std::ceil(std::log2(extent / 255.0))));
     for (;; ++e) {
       if (e > kMaxStepExponent) throw std::logic_error("quantize_wide_node: no step spans the node");
       const float step = std::ldexp(1.0f, e);

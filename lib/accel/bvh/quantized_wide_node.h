@@ -10,8 +10,8 @@
 /// every lower plane lies at or below the full node's, every upper plane at or above it, so each
 /// child box contains the box it stands for. A conservative box test (Ize 2013) on the enlarged
 /// boxes keeps every box the exact ray meets and gives entry distances no later than the full
-/// node's: traversal with quantized nodes finds the same first hits as with full ones, and may
-/// visit more nodes.
+/// node's: the certified kernel's first hits stay exact, a float kernel's are those of full nodes
+/// up to ties in t (which the visiting order breaks), and traversal may visit more nodes.
 ///
 /// 128 bytes at width 8 (the full node's 256), 96 at width 4 (128).
 #include <cstdint>
