@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""experiments/bvh_scale.py, run as a user runs it on the committed data of docs/bvh_scale: its tables
+parse as Markdown and say what the data say (the quantized-against-full ratios and the bench table's
+medians, recomputed here from runs.csv and bench_1e7.json), and a missing or foreign input gets one
+error line and exit status 2."""
+import csv
+import json
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+import unittest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+TOOL = ROOT / "experiments" / "bvh_scale.py"
+DATA = ROOT / "docs" / "bvh_scale"
+sys.path.insert(0, str(ROOT / "tests"))
+import check_markdown_tables  # noqa: E402
+
+
+def table_rows(md: str, header_start: str):
+    """The rows (lists of cells) of the first table whose header line starts with `header_start`."""
+    lines = md.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith(header_start))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([c.strip() for c in line.strip("|").split("|")])
+    return rows
+
+
+class BvhScale(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.TemporaryDirectory()
+        cls.out = pathlib.Path(cls.dir.name)
+        run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs.csv"), str(cls.out),
+                              str(DATA / "bench_1e7.json")], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        cls.md = (cls.out / "README.md").read_text()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.dir.cleanup()
+
+    def test_tables_parse(self):
+        self.assertEqual(check_markdown_tables.main([str(self.out / "README.md")]), 0)
+
+    def test_quantized_ratios_are_the_data(self):
+        rows = list(csv.DictReader(open(DATA / "runs.csv")))
+        ratio = {}
+        for r in rows:
+            ratio[(r["scene"], r["accel"], r["ray_kind"], r["replicate"])] = \
+                float(r["embree_ns_per_ray_min"]) / float(r["ns_per_ray_min"])
+        table = table_rows(self.md, "| scene | triangles | comparison |")
+        self.assertGreater(len(table), 0)
+        for cells in table:
+            scene, full = cells[0], cells[2].split(" / ")[1].strip("`")
+            quantized = cells[2].split(" / ")[0].strip("`")
+            for kind, cell in zip(["primary", "diffuse", "shadow"], cells[3:6]):
+                reps = sorted({k[3] for k in ratio if k[:3] == (scene, full, kind)})
+                expected = statistics.median(ratio[(scene, quantized, kind, r)] / ratio[(scene, full, kind, r)]
+                                             for r in reps)
+                self.assertAlmostEqual(float(cell.split(" ")[0]), expected, delta=0.0051, msg=f"{scene} {kind}")
+
+    def test_bench_table_is_the_json(self):
+        runs = [b for b in json.loads((DATA / "bench_1e7.json").read_text())["benchmarks"]
+                if b.get("run_type") == "iteration"]
+        table = table_rows(self.md, "| scene | triangles | structure | rays | ratio to `embree`")
+        self.assertEqual(len(table), len({b["run_name"] for b in runs}))
+        for cells in table:
+            scene, spec, kind = cells[0], cells[2].strip("`"), cells[3]
+            values = [b["vs_embree_fast"] for b in runs if b["run_name"].startswith(f"BM_BvhTrace/{scene}/{kind}:")
+                      and b["run_name"].split("/")[3] == spec]
+            self.assertEqual(int(cells[5]), len(values))
+            self.assertAlmostEqual(float(cells[4].split(" ")[0]), statistics.median(values), delta=0.0051)
+
+    def refused(self, *args):
+        run = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
+        self.assertEqual(run.returncode, 2, run.stderr)
+        self.assertEqual(len(run.stderr.strip().splitlines()), 1, run.stderr)
+        return run.stderr
+
+    def test_refuses_missing_and_foreign_inputs(self):
+        with tempfile.TemporaryDirectory() as d:
+            self.assertIn("no such file", self.refused(str(pathlib.Path(d) / "none.csv"), d))
+            self.assertIn("not a bench_bvh JSON", self.refused(str(DATA / "runs.csv"), d, str(DATA / "runs.csv")))
+            empty = pathlib.Path(d) / "empty.json"
+            empty.write_text('{"benchmarks": []}')
+            self.assertIn("not a bench_bvh JSON", self.refused(str(DATA / "runs.csv"), d, str(empty)))
+
+
+if __name__ == "__main__":
+    unittest.main()
