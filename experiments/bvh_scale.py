@@ -98,10 +98,13 @@ def bench_section(bench_json: str) -> list:
         _, rest = b["name"].split("/", 1)
         parts = rest.split("/")  # scene / rays / spec / iterations:N; scene specs hold no '/'
         groups.setdefault((parts[0], parts[1].split(":")[0], parts[2]), []).append(b)
-    cmd = ("RAYLAB_BENCH_BVH_SCENES='...' RAYLAB_BENCH_BVH_SPECS='...' build/experiments/bench_bvh "
-           "--benchmark_repetitions=3 --benchmark_out=BENCH_JSON --benchmark_out_format=json")
-    md = ["", "## Scenes of 10^6 to 10^7 triangles (bench_bvh)", "",
-          f"`{cmd}`, then this script with BENCH_JSON ({pathlib.Path(bench_json).name} here). Each repetition builds "
+    scenes = ";".join(dict.fromkeys(k[0] for k in groups))
+    specs = ";".join(dict.fromkeys(k[2] for k in groups))
+    repetitions = max(len(g) for g in groups.values())
+    cmd = (f"RAYLAB_BENCH_BVH_SCENES='{scenes}' RAYLAB_BENCH_BVH_SPECS='{specs}' build/experiments/bench_bvh "
+           f"--benchmark_repetitions={repetitions} --benchmark_out={bench_json} --benchmark_out_format=json")
+    md = ["", "## Scenes beyond the sweep (bench_bvh)", "",
+          f"`{cmd}`, then this script with that JSON as BENCH_JSON. Each repetition builds "
           "every structure again and keeps the best of 5 passes alternating ours, `embree-robust` and `embree` on "
           "the same 65,536 rays (thread CPU time); *ratio* is `embree`'s time over ours, median over the "
           "repetitions [95% bootstrap].", "",
