@@ -37,6 +37,7 @@ matplotlib.use("Agg")
 sys.path.insert(0, str(pathlib.Path(__file__).parent))  # figures.py, shared by the plot modules
 
 import compare_results  # noqa: E402  (the comparison of two results files, shared with the tool)
+import process_replicates  # noqa: E402  (claims replicated in separate processes)
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 
@@ -403,6 +404,17 @@ def main() -> int:
     except (OSError, json.JSONDecodeError):
         noise_floor = None
     verdicts = read_verdicts(out)
+    try:
+        for i, v in enumerate(verdicts):
+            replicates = process_replicates.replicate_rows(out, v["claim"])
+            if replicates:
+                verdicts[i], md = process_replicates.combine(v, replicates)
+                if v["section"] not in texts:
+                    names.append(v["section"])
+                texts[v["section"]] = process_replicates.insert_after_verdict(texts.get(v["section"], ""), v["claim"], md)
+    except process_replicates.ReplicateError as e:
+        print(f"make_report.py: error: {e}", file=sys.stderr)
+        return 2
     numbers = read_numbers(out)
     if args.claim is not None:
         verdicts = [v for v in verdicts if v["claim"] == args.claim]

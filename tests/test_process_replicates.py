@@ -1,0 +1,143 @@
+#!/usr/bin/python3
+"""experiments/process_replicates.py and its use by make_report.py: a claim replicated in separate
+processes gets the t-interval over the processes and the verdict that interval gives under the
+claim's own rule, the most demanding of the processes' thresholds, and a table of the processes in
+its section; a replicate of another spec or a run without the claim's row is refused with one
+error line and exit status 2."""
+import csv
+import json
+import math
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+import unittest
+
+EXPERIMENTS = pathlib.Path(__file__).resolve().parent.parent / "experiments"
+sys.path.insert(0, str(EXPERIMENTS))
+import process_replicates  # noqa: E402
+
+FIELDS = ["claim", "title", "verdict", "key", "anchor", "key_name", "key_value", "ci95_lo", "ci95_hi", "replicates",
+          "spec", "interval", "threshold", "threshold_direction", "threshold_value", "threshold_tolerance", "command"]
+
+
+def row(value, lo, hi, threshold=0.2, direction="above", spec="kdtree:sweep=sort over kdtree:sweep=events",
+        verdict="confirmed", tolerance=""):
+    return {"claim": "4", "title": "build", "verdict": verdict, "key": f"b = {value}", "anchor": "claim-4",
+            "key_name": "b", "key_value": str(value), "ci95_lo": str(lo), "ci95_hi": str(hi), "replicates": "9",
+            "spec": spec, "interval": "bootstrap", "threshold": "b above k/2", "threshold_direction": direction,
+            "threshold_value": str(threshold), "threshold_tolerance": tolerance,
+            "command": "build/experiments/exp_spatial --mode quick --claim 4"}
+
+
+def write_verdicts(path: pathlib.Path, rows):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS)
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+
+
+class Combine(unittest.TestCase):
+    def test_mean_and_t_interval_over_the_processes(self):
+        first, reps = row(0.45, 0.43, 0.46), [row(0.52, 0.46, 0.58), row(0.56, 0.51, 0.63)]
+        combined, md = process_replicates.combine(first, reps)
+        values = [0.45, 0.52, 0.56]
+        mean, half = statistics.fmean(values), 4.303 * statistics.stdev(values) / math.sqrt(3)
+        self.assertAlmostEqual(float(combined["key_value"]), mean, places=12)
+        self.assertAlmostEqual(float(combined["ci95_lo"]), mean - half, places=12)
+        self.assertAlmostEqual(float(combined["ci95_hi"]), mean + half, places=12)
+        self.assertEqual(combined["replicates"], "3")
+        self.assertEqual(combined["verdict"], "confirmed")
+        self.assertIn("| 3 | 0.56 | [0.51, 0.63] | 0.2 |", md)
+        self.assertIn('<a id="process-replicates-4"></a>', md)
+
+    def test_verdict_follows_the_interval_over_processes_not_the_first_process(self):
+        # The first process alone clears 0.2; the spread between processes does not.
+        combined, _ = process_replicates.combine(row(0.45, 0.43, 0.46), [row(0.15, 0.1, 0.2), row(0.35, 0.3, 0.4)])
+        self.assertEqual(combined["verdict"], "inconclusive at this noise")
+        combined, _ = process_replicates.combine(row(0.05, 0.04, 0.06, verdict="refuted"),
+                                                 [row(0.06, 0.05, 0.07), row(0.04, 0.03, 0.05)])
+        self.assertEqual(combined["verdict"], "refuted")
+
+    def test_the_most_demanding_threshold_decides(self):
+        # Above: the largest of the processes' thresholds, 0.5, lies inside [0.4, 0.6]-ish.
+        combined, _ = process_replicates.combine(row(0.50, 0.4, 0.6, threshold=0.1),
+                                                 [row(0.51, 0.4, 0.6, threshold=0.5), row(0.52, 0.4, 0.6, threshold=0.2)])
+        self.assertEqual(float(combined["threshold_value"]), 0.5)
+        self.assertEqual(combined["verdict"], "inconclusive at this noise")
+        combined, _ = process_replicates.combine(row(1.00, 0.9, 1.1, threshold=1.2, direction="below"),
+                                                 [row(1.01, 0.9, 1.1, threshold=1.05, direction="below"),
+                                                  row(1.02, 0.9, 1.1, threshold=1.3, direction="below")])
+        self.assertEqual(float(combined["threshold_value"]), 1.05)
+        self.assertEqual(combined["verdict"], "confirmed")
+
+    def test_within(self):
+        rows = [row(v, v - 0.001, v + 0.001, threshold=1.0, direction="within", tolerance="0.02")
+                for v in (0.999, 1.001, 1.0)]
+        self.assertEqual(process_replicates.combine(rows[0], rows[1:])[0]["verdict"], "confirmed")
+        rows = [row(v, v - 0.001, v + 0.001, threshold=1.0, direction="within", tolerance="0.02")
+                for v in (1.05, 1.06, 1.055)]
+        self.assertEqual(process_replicates.combine(rows[0], rows[1:])[0]["verdict"], "refuted")
+
+    def test_refuses_foreign_or_broken_replicates(self):
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "spec"):
+            process_replicates.combine(row(0.45, 0.4, 0.5), [row(0.5, 0.4, 0.6, spec="kdtree:sweep=sort")])
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "not a finite number"):
+            process_replicates.combine(row(0.45, 0.4, 0.5), [row("nan", 0.4, 0.6)])
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "cannot be decided"):
+            process_replicates.combine(row(0.45, 0.4, 0.5, direction="conditional"),
+                                       [row(0.5, 0.4, 0.6, direction="conditional")])
+
+
+class MakeReport(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.addCleanup(self.dir.cleanup)
+        self.out = pathlib.Path(self.dir.name)
+        write_verdicts(self.out / "spatial.verdicts.csv", [row(0.45, 0.43, 0.46)])
+        (self.out / "spatial.md").write_text('## Spatial\n\n<a id="verdict-4"></a>**Verdict (claim 4): confirmed.** b.\n\n'
+                                             "Measured by exp_spatial.\n")
+        for k, v in ((2, 0.52), (3, 0.56)):
+            write_verdicts(self.out / "process_replicates" / "claim-4" / f"run-{k}" / "spatial.verdicts.csv",
+                           [row(v, v - 0.05, v + 0.05)])
+
+    def make_report(self):
+        return subprocess.run([sys.executable, str(EXPERIMENTS / "make_report.py"), str(self.out)], capture_output=True,
+                              text=True, timeout=300)
+
+    def test_report_decides_the_claim_over_the_processes(self):
+        r = self.make_report()
+        self.assertEqual(r.returncode, 0, r.stderr)
+        page = (self.out / "README.md").read_text()
+        summary = next(line for line in page.splitlines() if line.startswith("| 4. "))
+        self.assertIn("n = 3", summary)
+        self.assertIn("processes: 0.45, 0.52, 0.56", summary)
+        # The processes' table follows the verdict paragraph, before the rest of the section.
+        self.assertLess(page.index('<a id="verdict-4"></a>'), page.index('<a id="process-replicates-4"></a>'))
+        self.assertLess(page.index('<a id="process-replicates-4"></a>'), page.index("Measured by exp_spatial."))
+        key = next(c for c in json.loads((self.out / "results.json").read_text())["claims"] if c["id"] == "4")["key"]
+        self.assertEqual(key["replicates"], 3)
+        self.assertAlmostEqual(key["value"], statistics.fmean([0.45, 0.52, 0.56]), places=9)
+        self.assertIn("separate processes", key["interval"])
+
+    def test_a_replicate_of_another_spec_is_one_error(self):
+        write_verdicts(self.out / "process_replicates" / "claim-4" / "run-3" / "spatial.verdicts.csv",
+                       [row(0.5, 0.4, 0.6, spec="kdtree:sweep=events over kdtree:sweep=sort")])
+        r = self.make_report()
+        self.assertEqual(r.returncode, 2)
+        self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+        self.assertIn("spec", r.stderr)
+        self.assertFalse((self.out / "README.md").exists())
+
+    def test_a_run_without_the_claims_row_is_one_error(self):
+        write_verdicts(self.out / "process_replicates" / "claim-4" / "run-2" / "spatial.verdicts.csv", [])
+        r = self.make_report()
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("expected one verdict row of claim 4, found 0", r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
