@@ -105,7 +105,7 @@ def combine(first: dict, replicates: list):
     threshold = max(thresholds) if direction == "above" else min(thresholds) if direction == "below" else thresholds[0]
     if direction == "within" and any(t != thresholds[0] for t in thresholds):
         raise ReplicateError(f"claim {claim}: the processes' targets differ: {thresholds}")
-    tolerance = float(first["threshold_tolerance"]) if first.get("threshold_tolerance") else math.nan
+    tolerance = number(first, "threshold_tolerance", "first process") if direction == "within" else math.nan
     verdict = decide(lo, hi, direction, threshold, tolerance)
     row = dict(first)
     row.update(key_value=repr(mean), ci95_lo=repr(lo), ci95_hi=repr(hi), replicates=str(n),

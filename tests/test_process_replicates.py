@@ -87,6 +87,9 @@ class Combine(unittest.TestCase):
             process_replicates.combine(row(0.45, 0.4, 0.5), [row(0.5, 0.4, 0.6, spec="kdtree:sweep=sort")])
         with self.assertRaisesRegex(process_replicates.ReplicateError, "not a finite number"):
             process_replicates.combine(row(0.45, 0.4, 0.5), [row("nan", 0.4, 0.6)])
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "threshold_tolerance"):
+            process_replicates.combine(row(1.0, 0.9, 1.1, direction="within", tolerance="wide"),
+                                       [row(1.0, 0.9, 1.1, direction="within", tolerance="wide")])
         with self.assertRaisesRegex(process_replicates.ReplicateError, "cannot be decided"):
             process_replicates.combine(row(0.45, 0.4, 0.5, direction="conditional"),
                                        [row(0.5, 0.4, 0.6, direction="conditional")])
