@@ -291,6 +291,27 @@ def default_kernel_line(out: pathlib.Path) -> str:
     return text
 
 
+def noise_floor_drift_line(start, end) -> str:
+    """The noise floor measured again at the end of the run (noise_floor_end/, by ./lab report) against
+    the one at its start: whether the machine's speed held. "" when either is missing."""
+    if not start or not end:
+        return ""
+    try:
+        r0, (r0_lo, r0_hi) = start["ratio"], start["ci95"]
+        r1, (r1_lo, r1_hi) = end["ratio"], end["ci95"]
+        ns0, ns1, e0, e1 = start["median_ns"], end["median_ns"], start["embree_median_ns"], end["embree_median_ns"]
+        held = r1_lo <= r0_hi and r0_lo <= r1_hi
+    except (KeyError, TypeError, ValueError):
+        return ""
+    verdict = ("the machine's speed held: the two intervals overlap" if held else
+               "**the machine's state changed during the run**: the two intervals are disjoint, so timed figures from "
+               "its start and its end differ by more than their own intervals; compare them with care")
+    return (f"**Noise floor at the start and at the end of this run** (`bvh` / `embree`, `cgal:bunny00`, diffuse rays): "
+            f"{r0:.3f} [{r0_lo:.3f}, {r0_hi:.3f}] ({ns0:.0f} and {e0:.0f} ns/ray), then {r1:.3f} [{r1_lo:.3f}, "
+            f"{r1_hi:.3f}] ({ns1:.0f} and {e1:.0f} ns/ray): {verdict} (`build/experiments/exp_noise_floor`, run "
+            "first and last by `./lab report`).")
+
+
 def machine_line(m: dict, revision: str) -> str:
     caches = ", ".join(f"{k} {v}" for k, v in m["caches"].items()) or "cache sizes unknown"
     libs = ", ".join(f"{k} {v}" for k, v in m["libraries"].items())
@@ -403,6 +424,10 @@ def main() -> int:
         noise_floor = json.loads((out / "noise_floor.json").read_text())
     except (OSError, json.JSONDecodeError):
         noise_floor = None
+    try:
+        noise_floor_end = json.loads((out / "noise_floor_end" / "noise_floor.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        noise_floor_end = None
     verdicts = read_verdicts(out)
     try:
         for i, v in enumerate(verdicts):
@@ -422,6 +447,8 @@ def main() -> int:
             print(f"make_report.py: error: {out} holds no verdict of claim {args.claim}", file=sys.stderr)
             return 2
     results = results_json(verdicts, numbers, machine, noise_floor, revision)
+    if noise_floor_end is not None:
+        results["noise_floor_end"] = noise_floor_end
     previous = previous_results(args.previous)
     if args.claim is not None and previous is not None:
         kept = {n["id"] for n in numbers}
@@ -435,7 +462,10 @@ def main() -> int:
             "with full citations and the threshold each verdict is decided by, is in [docs/theory.md](../theory.md). "
             "The same verdicts, key numbers, intervals and specs are in [results.json](results.json); "
             "`experiments/compare_results.py A.json B.json` compares two of them.", "",
-            machine_line(machine, revision), "", default_kernel_line(out), ""]
+            machine_line(machine, revision), ""]
+    drift = noise_floor_drift_line(noise_floor, noise_floor_end)
+    page += [drift, ""] if drift else []
+    page += [default_kernel_line(out), ""]
     page += summary_table(verdicts, anchors)
     page += changes_section(previous, results)
     for n in names:

@@ -58,6 +58,35 @@ def verdict_row(claim, verdict, value, lo, hi, spec, anchor):
             "command": "build/experiments/exp_x --mode quick"}
 
 
+def noise_floor(ratio, lo, hi, ns=234.0, embree_ns=188.0):
+    return {"ratio": ratio, "ci95": [lo, hi], "median_ns": ns, "embree_median_ns": embree_ns, "replicates": 20}
+
+
+class NoiseFloorDrift(unittest.TestCase):
+    """The noise floor at the end of a run against the one at its start (make_report.noise_floor_drift_line)."""
+
+    @classmethod
+    def setUpClass(cls):
+        import make_report
+        cls.line = staticmethod(make_report.noise_floor_drift_line)
+
+    def test_overlapping_intervals_held(self):
+        line = self.line(noise_floor(0.80, 0.79, 0.81), noise_floor(0.805, 0.80, 0.82))
+        self.assertIn("0.800 [0.790, 0.810]", line)
+        self.assertIn("held", line)
+        self.assertNotIn("changed", line)
+
+    def test_disjoint_intervals_changed(self):
+        line = self.line(noise_floor(0.713, 0.708, 0.718, 309.5, 220.3), noise_floor(0.80, 0.79, 0.81))
+        self.assertIn("changed during the run", line)
+        self.assertIn("(310 and 220 ns/ray)", line)
+
+    def test_missing_or_malformed_says_nothing(self):
+        self.assertEqual(self.line(None, noise_floor(0.8, 0.79, 0.81)), "")
+        self.assertEqual(self.line(noise_floor(0.8, 0.79, 0.81), {"ratio": 0.8}), "")
+        self.assertEqual(self.line({"spec": "old file"}, noise_floor(0.8, 0.79, 0.81)), "")
+
+
 class MakeReport(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -79,6 +108,8 @@ class MakeReport(unittest.TestCase):
         (out / "image_log_objects.md").write_text('<a id="claim-1"></a>\n\n## Image log objects\n')
         (out / "noise_floor.md").write_text("## Noise floor\n")
         (out / "noise_floor.json").write_text(json.dumps({"spec": "bvh vs embree", "replicates": 20, "cv": 0.04}))
+        (out / "noise_floor_end").mkdir()
+        (out / "noise_floor_end" / "noise_floor.json").write_text(json.dumps(noise_floor(0.71, 0.70, 0.72)))
         previous = compare_results.parse_results(json.dumps({
             "format": "raylab-results", "version": 1, "revision": self.head(), "machine": {}, "noise_floor": None,
             "claims": [{"id": "3", "verdict": "confirmed", "key": {"name": "x of 3", "value": 0.3, "ci95": [0.25, 0.35],
@@ -104,6 +135,7 @@ class MakeReport(unittest.TestCase):
         return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, cwd=ROOT).stdout.strip()
 
     def test_results_json(self):
+        self.assertEqual(self.results["noise_floor_end"]["ratio"], 0.71)
         r = compare_results.parse_results(json.dumps(self.results), "results.json")
         self.assertEqual([c["id"] for c in r["claims"]], ["1", "3", "3c"])
         by_id = {c["id"]: c for c in r["claims"]}
