@@ -291,6 +291,14 @@ def default_kernel_line(out: pathlib.Path) -> str:
     return text
 
 
+def read_noise_floor(directory: pathlib.Path):
+    """exp_noise_floor's noise_floor.json in `directory`; None when absent or not JSON."""
+    try:
+        return json.loads((directory / "noise_floor.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        return None
+
+
 def noise_floor_drift_line(start, end) -> str:
     """The noise floor measured again at the end of the run (noise_floor_end/, by ./lab report) against
     the one at its start: whether the machine's speed held. "" when either is missing."""
@@ -420,14 +428,8 @@ def main() -> int:
     anchors = set(re.findall(r'<a id="([^"]+)"></a>', "\n".join(texts.values())))
     revision = git_revision()
     machine = machine_info()
-    try:
-        noise_floor = json.loads((out / "noise_floor.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        noise_floor = None
-    try:
-        noise_floor_end = json.loads((out / "noise_floor_end" / "noise_floor.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        noise_floor_end = None
+    noise_floor = read_noise_floor(out)
+    noise_floor_end = read_noise_floor(out / "noise_floor_end")
     verdicts = read_verdicts(out)
     try:
         for i, v in enumerate(verdicts):
