@@ -22,6 +22,7 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
+#include "accel/common/timing_cpu.h"
 #include "accel/common/tracer.h"
 #include "cost/model_file.h"
 #include "bench_env.h"
@@ -69,9 +70,11 @@ double thread_cpu_now() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-/// Thread CPU seconds of `f()` (single thread: the time a shared machine keeps it waiting is out).
+/// Thread CPU seconds of `f()` (single thread: the time a shared machine keeps it waiting is out),
+/// on the timing CPU when `RAYLAB_TIMING_CPU` names one.
 template <class F>
 double cpu_seconds_of(F&& f) {
+  const TimingCpuScope pinned;
   const double start = thread_cpu_now();
   f();
   return thread_cpu_now() - start;

@@ -24,6 +24,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/tracer.h"
 #include "scene/scene_spec.h"
+#include "bench_env.h"
 
 using namespace raylab;
 

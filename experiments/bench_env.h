@@ -9,11 +9,24 @@
 #include <vector>
 
 #include "accel/common/accel_factory.h"
+#include "accel/common/timing_cpu.h"
 #include "cost/model_file.h"
 #include "geometry/input_error.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
+
+/// $RAYLAB_TIMING_CPU (accel/common/timing_cpu.h), checked when a benchmark binary that includes
+/// this header starts: a bad value ends it with one `error:` line and exit status 2.
+inline const bool timing_cpu_checked = [] {
+  try {
+    (void)timing_cpu();
+  } catch (const InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    std::exit(2);
+  }
+  return true;
+}();
 
 /// The ';'-separated items of $`variable` (empty items dropped); nullopt when it is unset or empty.
 inline std::optional<std::vector<std::string>> list_from_env(const char* variable) {

@@ -13,6 +13,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "bench_env.h"
 #include "scene/scene_spec.h"
 
 using namespace raylab;

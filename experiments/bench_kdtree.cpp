@@ -23,6 +23,7 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
+#include "accel/common/timing_cpu.h"
 #include "accel/common/tracer.h"
 #include "cost/model_file.h"
 #include "scene/scene_spec.h"
@@ -69,6 +70,7 @@ double pass_seconds(const Aggregate& accel, const std::vector<Ray>& rays) {
 /// CPU time of the calling thread spent building `accel_spec` (single-threaded builds only): on a
 /// shared machine it leaves out the time the thread waited for a core.
 double seconds_to_build(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene) {
+  const TimingCpuScope pinned;
   timespec start{}, end{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &start);
   auto accel = make_accelerator(accel_spec, scene, model_build_context());

@@ -87,11 +87,14 @@ double ns_per_triangle_test(const Scene& scene, const std::vector<Ray>& rays) {
 }
 
 /// Builds `spec` on `scene` inside a TBB arena of `threads` threads (Embree's TBB build and our
-/// parallel builders both respect it); returns the accelerator and the build seconds.
+/// parallel builders both respect it), on the timing CPU when single-threaded; returns the
+/// accelerator and the build seconds.
 std::pair<std::unique_ptr<Aggregate>, double> build(const std::string& spec, std::shared_ptr<const Scene> scene,
                                                    int threads) {
   std::unique_ptr<Aggregate> accel;
-  tbb::task_arena arena(resolve_thread_count(threads));
+  const int thread_count = resolve_thread_count(threads);
+  const TimingCpuScope pinned(thread_count == 1);
+  tbb::task_arena arena(thread_count);
   const double s = seconds_of([&] { arena.execute([&] { accel = make_accelerator(spec, scene); }); });
   return {std::move(accel), s};
 }

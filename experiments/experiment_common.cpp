@@ -22,6 +22,12 @@ Options parse_options(int argc, char** argv, const std::string& description) {
     std::cerr << argv[0] << ": error: " << e.what() << "\n";
     std::exit(2);
   }
+  try {
+    (void)timing_cpu();  // a bad RAYLAB_TIMING_CPU fails here, before any work
+  } catch (const InputError& e) {
+    std::cerr << argv[0] << ": error: " << e.what() << "\n";
+    std::exit(2);
+  }
   std::filesystem::create_directories(o.out);
   return o;
 }

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "accel/common/timing_cpu.h"
 #include "accel/common/tracer.h"
 #include "cost/csv.h"
 #include "cost/fit.h"
@@ -246,7 +247,9 @@ inline double seconds_of(const std::function<void()>& f) {
 
 /// CPU time of the calling thread spent in `f` (CLOCK_THREAD_CPUTIME_ID): on a shared machine it
 /// leaves out the time the thread waited for a core. Only for work done on the calling thread.
+/// Runs on the timing CPU when `RAYLAB_TIMING_CPU` names one (accel/common/timing_cpu.h).
 inline double thread_cpu_seconds_of(const std::function<void()>& f) {
+  const TimingCpuScope pinned;
   timespec start{}, end{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &start);
   f();
@@ -328,7 +331,9 @@ inline std::string provenance() {
 #elif defined(__AVX2__)
   flags += " -march=native (AVX2)";
 #endif
-  return flags + ", FTZ/DAZ on, " + std::to_string(resolve_thread_count(0)) + " hardware threads";
+  flags += ", FTZ/DAZ on, " + std::to_string(resolve_thread_count(0)) + " hardware threads";
+  const int cpu = timing_cpu();
+  return cpu < 0 ? flags : flags + ", single-thread timings on CPU " + std::to_string(cpu) + " (RAYLAB_TIMING_CPU)";
 }
 
 inline void progress(const std::string& line) { std::cerr << (line + "\n") << std::flush; }  // one write: lines from threads do not mix

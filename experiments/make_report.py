@@ -13,7 +13,8 @@ verdicts (each linking to its verdict paragraph, anchor verdict-<claim>) and the
 last report, and closes with the list of verdicts, all generated here, never edited by hand.
 
 results.json: the same verdicts with their key numbers, 95% intervals, replicates and full specs,
-the machine, and the noise floor (noise_floor.json, written by exp_noise_floor, when present), in
+the machine, the noise floor (noise_floor.json, written by exp_noise_floor, when present) and the
+CPU single-thread timings ran on (timing_cpu/timing_cpu.json, by ./lab report, when present), in
 the format compare_results.py reads. Before writing it, the results.json committed at HEAD (or the
 file given by --previous) is compared with the new one, and every key number that left its
 interval and every verdict that flipped is listed under "Changes since the last report" with its
@@ -38,6 +39,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).parent))  # figures.py, shared by 
 
 import compare_results  # noqa: E402  (the comparison of two results files, shared with the tool)
 import process_replicates  # noqa: E402  (claims replicated in separate processes)
+import timing_cpu  # noqa: E402  (the CPU single-thread timings ran on)
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
 
@@ -430,6 +432,10 @@ def main() -> int:
     machine = machine_info()
     noise_floor = read_noise_floor(out)
     noise_floor_end = read_noise_floor(out / "noise_floor_end")
+    try:
+        timing_cpu_summary = json.loads((out / "timing_cpu" / "timing_cpu.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        timing_cpu_summary = None
     verdicts = read_verdicts(out)
     try:
         for i, v in enumerate(verdicts):
@@ -451,6 +457,8 @@ def main() -> int:
     results = results_json(verdicts, numbers, machine, noise_floor, revision)
     if noise_floor_end is not None:
         results["noise_floor_end"] = noise_floor_end
+    if timing_cpu_summary is not None:
+        results["timing_cpu"] = timing_cpu_summary
     previous = previous_results(args.previous)
     if args.claim is not None and previous is not None:
         kept = {n["id"] for n in numbers}
@@ -465,6 +473,8 @@ def main() -> int:
             "The same verdicts, key numbers, intervals and specs are in [results.json](results.json); "
             "`experiments/compare_results.py A.json B.json` compares two of them.", "",
             machine_line(machine, revision), ""]
+    pinned = timing_cpu.header_line(timing_cpu_summary)
+    page += [pinned, ""] if pinned else []
     drift = noise_floor_drift_line(noise_floor, noise_floor_end)
     page += [drift, ""] if drift else []
     page += [default_kernel_line(out), ""]

@@ -3,6 +3,7 @@
 // documented fields, and brute force agrees with the exact oracle.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sched.h>
 #include <sys/wait.h>
 
 #include <cstdlib>
@@ -84,6 +85,29 @@ TEST(ToolCli, BadInputGivesOneErrorLineAndExitStatusTwo) {
     EXPECT_EQ(r.err.rfind("raylab: error: ", 0), 0u) << args << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
   }
+}
+
+// RAYLAB_TIMING_CPU (accel/common/timing_cpu.h): a CPU the process may use pins the single-thread
+// trace; anything else is one error line before any work.
+TEST(ToolCli, TimingCpuFromTheEnvironment) {
+  cpu_set_t mask;
+  CPU_ZERO(&mask);
+  ASSERT_EQ(sched_getaffinity(0, sizeof mask, &mask), 0);
+  int cpu = 0;
+  while (!CPU_ISSET(cpu, &mask)) ++cpu;
+  for (const std::string& bad : {std::string("x"), std::string("-3"), std::to_string(CPU_SETSIZE)}) {
+    setenv("RAYLAB_TIMING_CPU", bad.c_str(), 1);
+    const ToolRun r = run_tool("trace --scene soup:n=100 --threads 1");
+    EXPECT_EQ(r.status, 2) << bad << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("raylab: error: RAYLAB_TIMING_CPU=" + bad + ": not a CPU this process may run on", 0), 0u)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  setenv("RAYLAB_TIMING_CPU", std::to_string(cpu).c_str(), 1);
+  const ToolRun ok = run_tool("trace --scene soup:n=100 --rays diffuse:1000 --threads 1 --json");
+  unsetenv("RAYLAB_TIMING_CPU");
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  EXPECT_EQ(nlohmann::json::parse(ok.out)["rays"], 1000);
 }
 
 TEST(ToolCli, RenderWritesALogScaleHeatmap) {

@@ -27,6 +27,7 @@
 #include "accel/common/accel_factory.h"
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
+#include "accel/common/timing_cpu.h"
 #include "accel/common/tracer.h"
 #include "accel/exact/contact_classes.h"
 #include "cost/auto_accel.h"
@@ -522,6 +523,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    (void)timing_cpu();  // a bad RAYLAB_TIMING_CPU fails before any work
     if (app.got_subcommand("accels")) print_accels();
     else if (app.got_subcommand("scenes")) print_scenes();
     else if (app.got_subcommand("rays")) print_ray_generators();

@@ -14,6 +14,7 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
+#include "accel/common/timing_cpu.h"
 #include "accel/common/tracer.h"
 #include "cost/model_file.h"
 #include "cost/provenance.h"
@@ -353,7 +354,9 @@ ShardSpec parse_shard(const std::string& text) {
 
 BuiltStructure build_structure(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene, int threads) {
   BuiltStructure b;
-  tbb::task_arena arena(resolve_thread_count(threads));
+  const int thread_count = resolve_thread_count(threads);
+  const TimingCpuScope pinned(thread_count == 1);
+  tbb::task_arena arena(thread_count);
   const auto start = std::chrono::steady_clock::now();
   arena.execute([&] { b.accel = make_accelerator(accel_spec, scene, model_build_context()); });
   b.build_s = seconds_since(start);

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <thread>
 
+#include "accel/common/timing_cpu.h"
 #include "geometry/float_mode.h"
 
 namespace raylab {
@@ -37,7 +38,9 @@ TraceResult trace_rays(const Primitive& prim, const std::vector<Ray>& rays, cons
   else result.hits.assign(n, Hit{});
   tbb::combinable<RayCounters> counters;
   std::atomic<std::size_t> hit_count{0};
-  tbb::task_arena arena(resolve_thread_count(options.threads));
+  const int threads = resolve_thread_count(options.threads);
+  const TimingCpuScope pinned(threads == 1);
+  tbb::task_arena arena(threads);
   const double cpu_start = thread_cpu_now();
   const auto start = std::chrono::steady_clock::now();
   arena.execute([&] {
