@@ -984,7 +984,7 @@ std::string reinsertion(Runner& run, const Options& opt) {
         t.take_times(rt, which, 2);
         const std::string spec = which == 0 ? "bvh:optimize=reinsert" : "bvh";
         run.row("reinsert", s, r, spec, "", 1, which == 0 ? optimised_s : plain_s, which == 0 ? *optimised : *plain, t,
-                -1, 0.0, 0.0, bootstrap_median(seconds[which]));
+                -1, 0.0, 0.0, bootstrap_median(seconds[which == 0 ? 1 : 0]));  // seconds: plain, optimised, Embree
       }
     }
     run.forget_scene(s);

@@ -87,6 +87,58 @@ class NoiseFloorDrift(unittest.TestCase):
         self.assertEqual(self.line({"spec": "old file"}, noise_floor(0.8, 0.79, 0.81)), "")
 
 
+class DefaultKernelLine(unittest.TestCase):
+    """The header's cost of the certified default: goals decided by each row's interval, not its point."""
+
+    @classmethod
+    def setUpClass(cls):
+        import make_report
+        cls.make_report = make_report
+
+    def write(self, name, columns, rows):
+        path = pathlib.Path(self.dir.name) / name
+        with path.open("w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(columns)
+            w.writerows(rows)
+        return path
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.addCleanup(self.dir.cleanup)
+
+    def test_rows_are_met_missed_or_straddling_by_their_interval(self):
+        path = self.write("certainty_structures.csv", ["structure", "ratio_median", "ratio_lo", "ratio_hi"],
+                          [["bvh", 1.05, 1.02, 1.08], ["bsp", 1.09, 1.05, 1.17], ["kdtree", 1.14, 1.12, 1.16],
+                           ["grid", 0.6, 0.55, 0.7]])
+        line = self.make_report.certified_cost_sentence(path)
+        self.assertIn("0.60–1.14×", line)
+        self.assertIn("2 of 4 rows met it, 1 missed it and 1 straddle it", line)
+        self.assertIn("1.140 [1.120, 1.160]", line)
+
+    def test_bvh_against_embree_with_intervals(self):
+        columns = ["scene", "rays", "accel", "ratio_to_embree", "ratio_to_embree_lo", "ratio_to_embree_hi",
+                   "ratio_to_embree_robust", "ratio_to_embree_robust_lo", "ratio_to_embree_robust_hi"]
+        path = self.write("certainty.csv", columns, [
+            ["s", "primary", "bvh", 0.93, 0.9, 0.95, 1.01, 0.99, 1.03],
+            ["s", "diffuse", "bvh", 0.80, 0.78, 0.82, 0.93, 0.9, 0.95],
+            ["s", "diffuse", "embree", 1.0, 1.0, 1.0, 1.2, 1.1, 1.3],
+            ["s", "vertices", "bvh", 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]])
+        line = self.make_report.default_bvh_against_embree_sentence(path)
+        self.assertIn("0.80 [0.78, 0.82] to 0.93 [0.90, 0.95] of Embree's throughput", line)
+        self.assertIn("0.93 [0.90, 0.95] to 1.01 [0.99, 1.03] of Embree robust's", line)
+        self.assertIn("of 2 scene and ray kind rows", line)
+
+    def test_files_without_intervals_or_missing_say_nothing(self):
+        old = self.write("old.csv", ["scene", "rays", "accel", "ns_per_ray"], [["s", "primary", "bvh", 100]])
+        self.assertEqual(self.make_report.certified_cost_sentence(old), "")
+        self.assertEqual(self.make_report.default_bvh_against_embree_sentence(old), "")
+        missing = pathlib.Path(self.dir.name) / "none.csv"
+        self.assertEqual(self.make_report.certified_cost_sentence(missing), "")
+        bad = self.write("bad.csv", ["ratio_median", "ratio_lo", "ratio_hi"], [["x", 1, 2]])
+        self.assertEqual(self.make_report.certified_cost_sentence(bad), "")
+
+
 class MakeReport(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
