@@ -51,8 +51,8 @@ class RatioGoal {
 
   std::string verdict() const { return missed_ ? "not met" : undecided_ ? "not shown at this noise" : "met"; }
 
-  /// "41 of 48 rows at most 1.10 with their whole 95% interval, 7 straddling it, 0 beyond; worst
-  /// median 1.098 [1.05, 1.17] (where): goal <= 1.10 not shown at this noise".
+  /// "41 of 48 rows at most 1.10 with their whole 95% interval, 7 straddling it, 0 beyond it;
+  /// worst median 1.098 [1.050, 1.170] (where): goal NAME <= 1.10: **not shown at this noise**".
   std::string summary(const std::string& name) const {
     const char* side = at_most_ ? "at most" : "at least";
     return fmt::format("{} of {} rows {} {:.2f} with their whole 95% interval, {} straddling it, {} beyond it; worst "
