@@ -266,10 +266,9 @@ TEST(CertifiedKernel, RaysStartingOnALargeTriangleGetTheExactFirstHit) {
             << " of " << leaving << " leaving and " << entering_double_stage << " of " << entering << " entering rays\n";
 }
 
-// Any-hit (occlusion) queries whose segment ends at the occluder: the packed test decides a lane
-// whose crossing enclosure lies inside [tmin, tmax] without the out-of-line stages. A segment
-// aimed at a point of a triangle, with tmax the float at, just before or just after the crossing
-// (and tmin likewise from the other side), must be blocked exactly when the scalar certified
+// Any-hit (occlusion) queries whose segment ends at the occluder: a segment aimed at a point of
+// a triangle, with tmax the float at, just before or just after the crossing (and tmin likewise
+// from the other side), must be blocked by the packed test exactly when the scalar certified
 // kernel finds a hit, near the origin, 10^4 from it and at 10^-4, for 4- and 8-lane tests.
 TEST(CertifiedKernel, PackedAnyHitAtTheSegmentEndsAgreesWithTheScalarKernel) {
   const FloatModeScope ftz(true);

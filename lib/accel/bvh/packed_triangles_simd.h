@@ -21,10 +21,7 @@
 ///    at once, by the same IEEE operations the bound's derivation counts; lanes whose edge
 ///    functions surely have opposite signs are misses. For the others, CertifiedKernel::
 ///    depth_bounds' float enclosure of t, computed for all lanes with its operations, rejects
-///    the lanes surely before tmin or after the current first hit (inline: the triangle a
-///    secondary ray leaves is dropped there). With kAnyHit, a lane whose crossing enclosure lies
-///    inside [tmin, tmax] is installed as decide_crossing would install it, without the call.
-///    The rest go, nearest lower
+///    the lanes surely before tmin or after the current first hit; the rest go, nearest lower
 ///    bound first (lane order with kAnyHit), to CertifiedKernel::decide_crossing (the enclosure
 ///    is the plane crossing's) or decide_triangle, which certify or ask the double stage and
 ///    the exact path, and each new first hit drops the lanes whose lower bound lies beyond it.
@@ -144,8 +141,7 @@ struct PacketKernel<CertifiedKernel> {
   };
 
   template <bool kAnyHit>
-  static int intersect(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket& p,
-                                              TriangleHit& hit) {
+  static int intersect(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket& p, TriangleHit& hit) {
     return intersect_lanes<kAnyHit, kPacketWidth>(c, r, &p, hit);
   }
 
@@ -153,8 +149,7 @@ struct PacketKernel<CertifiedKernel> {
   /// described below. The float filter is inline and frameless; a packet with a lane it leaves
   /// open goes to decide_open_lanes, out of line (most packets a ray is offered are misses).
   template <bool kAnyHit, int kLanes>
-  static int intersect_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p,
-                                                    TriangleHit& hit) {
+  static int intersect_lanes(CertifiedKernel::Context& c, const Ray& r, const TrianglePacket* p, TriangleHit& hit) {
     static_assert(kLanes == kPacketWidth || kLanes == 2 * kPacketWidth);
     using F = simd::Float<kLanes>;
     if (!c.filter) return decide_unfiltered<kAnyHit, kLanes>(c, p, hit);
@@ -179,80 +174,12 @@ struct PacketKernel<CertifiedKernel> {
     // Open: not surely missed (two edge functions of certain opposite signs) and in use: unused
     // lanes have NaN vertices, which no scene has (loaders reject non-finite coordinates; scene
     // specs produce finite ones, or infinite past the float range, never NaN).
-    unsigned open = ~((max(max(U, V), W) > B) & (min(min(U, V), W) < F::broadcast(0.0f) - B)) & (px == px);
+    const unsigned open = ~((max(max(U, V), W) > B) & (min(min(U, V), W) < F::broadcast(0.0f) - B)) & (px == px);
     if (open == 0) return -1;
-    // The depth cull inline as well: a ray leaving a surface opens the triangle it starts from
-    // (crossed just behind its origin) in nearly every leaf it starts in, and the cull drops it
-    // without the out-of-line call. decide_open_lanes recomputes the same bounds for the lanes left.
-    if (c.cull) {
-      const DepthCull<kLanes> d = depth_cull<kLanes>(c, r, U, V, W, B, az0, bz0, cz0, open);
-      if ((open = d.open) == 0) return -1;
-      if constexpr (kAnyHit) {
-        // An any-hit query ends at its first certain hit: a lane whose crossing enclosure lies
-        // inside [tmin, tmax] is what CertifiedKernel::decide_crossing would install (no hit yet),
-        // decided here without the call (most occluded shadow rays).
-        const unsigned sure = d.crossing & (d.t_lo >= F::broadcast(c.ray.tmin)) & (d.t_hi <= F::broadcast(c.ray.tmax));
-        if (sure != 0 && !c.has) return install_sure_lane<kLanes>(c, p, std::countr_zero(sure), U, V, W, d, hit);
-      }
-    }
     return decide_open_lanes<kAnyHit, kLanes>(c, r, p, U, V, W, B, az0, bz0, cz0, open, hit);
   }
 
  private:
-  /// CertifiedKernel::depth_bounds for every lane with its operations, and the cull it allows.
-  template <int kLanes>
-  struct DepthCull {
-    unsigned open;      ///< the lanes of `open` whose bounds reach [tmin, c.upper]
-    unsigned crossing;  ///< lanes of `open` bounded by the plane crossing's enclosure [t_lo, t_hi]
-    simd::Float<kLanes> t, t_lo, t_hi, range_lo, range_hi;
-  };
-
-  /// Lane `i` of a crossing whose enclosure [t_lo, t_hi] lies inside [tmin, tmax], installed as
-  /// CertifiedKernel::decide_crossing installs it: t̂ as t, the barycentrics from U, V, W.
-  template <int kLanes>
-  static int install_sure_lane(CertifiedKernel::Context& c, const TrianglePacket* p, int i, simd::Float<kLanes> U,
-                               simd::Float<kLanes> V, simd::Float<kLanes> W, const DepthCull<kLanes>& d,
-                               TriangleHit& hit) {
-    alignas(32) float u[kLanes], v[kLanes], w[kLanes], t[kLanes], lo[kLanes], hi[kLanes];
-    U.store(u), V.store(v), W.store(w), d.t.store(t), d.t_lo.store(lo), d.t_hi.store(hi);
-    const TrianglePacket& q = p[i / kPacketWidth];
-    const int l = i % kPacketWidth;
-    CertifiedKernel::install_crossing(c, q.prim[l], q.vertex(l, 0), q.vertex(l, 1), q.vertex(l, 2), u[i], v[i], w[i],
-                                      lo[i], hi[i], t[i]);
-    hit = c.best;
-    return i;
-  }
-
-  /// Bounds [lo, hi] on the exact t of every lane: the plane crossing's where the edge functions
-  /// certify a crossing of the interior, else the vertices' depth range; lanes of `open` whose
-  /// bounds miss [tmin, c.upper] are dropped. Requires c.cull.
-  template <int kLanes>
-  [[gnu::always_inline]] static DepthCull<kLanes> depth_cull(const CertifiedKernel::Context& c, const Ray& r,
-                                                           simd::Float<kLanes> U, simd::Float<kLanes> V,
-                                                           simd::Float<kLanes> W, simd::Float<kLanes> B,
-                                                           simd::Float<kLanes> az0, simd::Float<kLanes> bz0,
-                                                           simd::Float<kLanes> cz0, unsigned open) {
-    using F = simd::Float<kLanes>;
-    const F nB = F::broadcast(0.0f) - B;
-    const F sz = F::broadcast(r.sz);
-    const F za = az0 * sz, zb = bz0 * sz, zc = cz0 * sz;
-    const F zmin = min(min(za, zb), zc), zmax = max(max(za, zb), zc);
-    const F aU = abs(U), aV = abs(V), aW = abs(W), D = aU + aV + aW;
-    const F tiny = F::broadcast(0x1p-60f), big = F::broadcast(0x1p127f);
-    const unsigned certain = (min(min(U, V), W) > B) | (max(max(U, V), W) < nB);
-    const F inv_D = F::broadcast(1.0f) / D;
-    const F t = (aU * za + aV * zb + aW * zc) * inv_D;
-    const F E = F::broadcast(7.0f) * (B * inv_D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
-    const unsigned crossing = open & certain & (D >= F::broadcast(16.0f) * B) & (D >= tiny) &
-                              (D <= F::broadcast(0x1p120f)) & (abs(t) <= big) & (E <= big);
-    const F range_lo = zmin - (F::broadcast(0x1p-20f) * abs(zmin) + tiny);
-    const F range_hi = zmax + (F::broadcast(0x1p-20f) * abs(zmax) + tiny);
-    const F t_lo = t - E, t_hi = t + E;
-    const F tmin = F::broadcast(c.ray.tmin), upper = F::broadcast(c.upper);
-    open &= ~((crossing & ((t_hi < tmin) | (t_lo > upper))) | (~crossing & ((range_hi < tmin) | (range_lo > upper))));
-    return {open, crossing & open, t, t_lo, t_hi, range_lo, range_hi};
-  }
-
   /// The lanes in use of the kLanes / kPacketWidth packets from `p`.
   template <int kLanes>
   static unsigned filled_lanes(const TrianglePacket* p) {
@@ -286,6 +213,7 @@ struct PacketKernel<CertifiedKernel> {
                                                  simd::Float<kLanes> B, simd::Float<kLanes> az0,
                                                  simd::Float<kLanes> bz0, simd::Float<kLanes> cz0, unsigned open,
                                                  TriangleHit& hit) {
+    using F = simd::Float<kLanes>;
     const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
     const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
     // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
@@ -294,14 +222,28 @@ struct PacketKernel<CertifiedKernel> {
     alignas(32) float lo[kLanes], hi[kLanes], ts[kLanes];
     unsigned crossing = 0;
     if (c.cull) {
-      const DepthCull<kLanes> d = depth_cull<kLanes>(c, r, U, V, W, B, az0, bz0, cz0, open);
-      open = d.open;
+      const F nB = F::broadcast(0.0f) - B;
+      const F sz = F::broadcast(r.sz);
+      const F za = az0 * sz, zb = bz0 * sz, zc = cz0 * sz;
+      const F zmin = min(min(za, zb), zc), zmax = max(max(za, zb), zc);
+      const F aU = abs(U), aV = abs(V), aW = abs(W), D = aU + aV + aW;
+      const F tiny = F::broadcast(0x1p-60f), big = F::broadcast(0x1p127f);
+      const unsigned certain = (min(min(U, V), W) > B) | (max(max(U, V), W) < nB);
+      const F inv_D = F::broadcast(1.0f) / D;
+      const F t = (aU * za + aV * zb + aW * zc) * inv_D;
+      const F E = F::broadcast(7.0f) * (B * inv_D) * (zmax - zmin) + F::broadcast(0x1p-19f) * max(abs(zmin), abs(zmax)) + tiny;
+      crossing = open & certain & (D >= F::broadcast(16.0f) * B) & (D >= tiny) & (D <= F::broadcast(0x1p120f)) & (abs(t) <= big) & (E <= big);
+      const F range_lo = zmin - (F::broadcast(0x1p-20f) * abs(zmin) + tiny);
+      const F range_hi = zmax + (F::broadcast(0x1p-20f) * abs(zmax) + tiny);
+      const F t_lo = t - E, t_hi = t + E;
+      const F tmin = F::broadcast(c.ray.tmin), upper = F::broadcast(c.upper);
+      open &= ~((crossing & ((t_hi < tmin) | (t_lo > upper))) | (~crossing & ((range_hi < tmin) | (range_lo > upper))));
       if (open == 0) return -1;
-      crossing = d.crossing;
-      d.range_lo.store(lo), d.range_hi.store(hi);
+      crossing &= open;
+      range_lo.store(lo), range_hi.store(hi);
       if (crossing != 0) {
         alignas(32) float tl[kLanes], th[kLanes];
-        d.t_lo.store(tl), d.t_hi.store(th), d.t.store(ts);
+        t_lo.store(tl), t_hi.store(th), t.store(ts);
         for (unsigned m = crossing; m != 0; m &= m - 1) {
           const int i = std::countr_zero(m);
           lo[i] = tl[i], hi[i] = th[i];
