@@ -17,7 +17,6 @@
 // triangles (ns_per_triangle_test: cache-warm, so the triangle share is a lower bound and the
 // traversal share, the rest, an upper bound).
 #include <fmt/format.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -92,9 +91,7 @@ double ns_per_triangle_test(const Scene& scene, const std::vector<Ray>& rays) {
 std::pair<std::unique_ptr<Aggregate>, double> build(const std::string& spec, std::shared_ptr<const Scene> scene,
                                                    int threads) {
   std::unique_ptr<Aggregate> accel;
-  const int thread_count = resolve_thread_count(threads);
-  const TimingCpuScope pinned(thread_count == 1);
-  tbb::task_arena arena(thread_count);
+  TimingArena arena(threads);
   const double s = seconds_of([&] { arena.execute([&] { accel = make_accelerator(spec, scene); }); });
   return {std::move(accel), s};
 }

@@ -318,10 +318,11 @@ def default_kernel_line(out: pathlib.Path) -> str:
     return text
 
 
-def read_noise_floor(directory: pathlib.Path):
-    """exp_noise_floor's noise_floor.json in `directory`; None when absent or not JSON."""
+def read_json(path: pathlib.Path):
+    """The JSON in `path`; None when absent or not JSON (the report's optional summaries:
+    noise_floor.json at the start and the end, timing_cpu/timing_cpu.json)."""
     try:
-        return json.loads((directory / "noise_floor.json").read_text())
+        return json.loads(path.read_text())
     except (OSError, json.JSONDecodeError):
         return None
 
@@ -455,12 +456,9 @@ def main() -> int:
     anchors = set(re.findall(r'<a id="([^"]+)"></a>', "\n".join(texts.values())))
     revision = git_revision()
     machine = machine_info()
-    noise_floor = read_noise_floor(out)
-    noise_floor_end = read_noise_floor(out / "noise_floor_end")
-    try:
-        timing_cpu_summary = json.loads((out / "timing_cpu" / "timing_cpu.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        timing_cpu_summary = None
+    noise_floor = read_json(out / "noise_floor.json")
+    noise_floor_end = read_json(out / "noise_floor_end" / "noise_floor.json")
+    timing_cpu_summary = read_json(out / "timing_cpu" / "timing_cpu.json")
     verdicts = read_verdicts(out)
     try:
         for i, v in enumerate(verdicts):

@@ -104,7 +104,8 @@ TEST(TimingCpu, ScopePinsToTheNamedCpuAndRestores) {
     const TimingCpuScope scope;
     EXPECT_EQ(scope.cpu(), cpu);
     EXPECT_EQ(sched_getcpu(), cpu);
-    EXPECT_EQ(CPU_COUNT(&static_cast<const cpu_set_t&>(this_thread_mask())), 1);
+    const cpu_set_t pinned = this_thread_mask();
+    EXPECT_EQ(CPU_COUNT(&pinned), 1);
     {
       const TimingCpuScope nested;  // a timed trace inside a timed section
       EXPECT_EQ(sched_getcpu(), cpu);
@@ -119,7 +120,8 @@ TEST(TimingCpu, ScopePinsToTheNamedCpuAndRestores) {
 TEST(TimingCpu, SingleThreadTraceRunsOnTheTimingCpuAndParallelTracesKeepEveryCpu) {
   const int cpu = last_allowed_cpu();
   ASSERT_GE(cpu, 0);
-  const int allowed = CPU_COUNT(&static_cast<const cpu_set_t&>(this_thread_mask()));
+  const cpu_set_t mask = this_thread_mask();
+  const int allowed = CPU_COUNT(&mask);
   const TimingCpuVariable variable(std::to_string(cpu));
   const std::vector<Ray> rays(4096, Ray{{0, 0, 0}, {0, 0, 1}});
   {

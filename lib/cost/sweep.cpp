@@ -1,7 +1,5 @@
 #include "cost/sweep.h"
 
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -354,9 +352,7 @@ ShardSpec parse_shard(const std::string& text) {
 
 BuiltStructure build_structure(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene, int threads) {
   BuiltStructure b;
-  const int thread_count = resolve_thread_count(threads);
-  const TimingCpuScope pinned(thread_count == 1);
-  tbb::task_arena arena(thread_count);
+  TimingArena arena(threads);
   const auto start = std::chrono::steady_clock::now();
   arena.execute([&] { b.accel = make_accelerator(accel_spec, scene, model_build_context()); });
   b.build_s = seconds_since(start);

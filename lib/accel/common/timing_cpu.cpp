@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "accel/common/tracer.h"
 #include "geometry/input_error.h"
 
 namespace raylab {
@@ -38,7 +39,9 @@ int timing_cpu() {
   char* end = nullptr;
   errno = 0;
   const long cpu = std::strtol(value, &end, 10);
-  if (errno != 0 || !std::isdigit(static_cast<unsigned char>(value[0])) || *end != '\0' || cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &mask))
+  // Digits only: no sign, no leading space (strtol would accept both).
+  if (errno != 0 || !std::isdigit(static_cast<unsigned char>(value[0])) || *end != '\0' || cpu >= CPU_SETSIZE ||
+      !CPU_ISSET(cpu, &mask))
     throw InputError(std::string(kVariable) + "=" + text + ": not a CPU this process may run on (allowed: " +
                      allowed_cpus(mask) + ")");
   return static_cast<int>(cpu);
@@ -62,5 +65,8 @@ TimingCpuScope::TimingCpuScope(bool pin) {
 TimingCpuScope::~TimingCpuScope() {
   if (cpu_ >= 0) sched_setaffinity(0, sizeof saved_mask_, &saved_mask_);
 }
+
+TimingArena::TimingArena(int threads)
+    : threads_(resolve_thread_count(threads)), pinned_(threads_ == 1), arena_(threads_) {}
 
 }  // namespace raylab

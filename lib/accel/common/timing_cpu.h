@@ -12,6 +12,9 @@
 /// CPU number this process may run on (in the calling thread's affinity mask), or
 /// timing_cpu() throws InputError naming the variable, the value and the allowed CPUs.
 #include <sched.h>
+#include <tbb/task_arena.h>
+
+#include <utility>
 
 namespace raylab {
 
@@ -36,6 +39,25 @@ class TimingCpuScope {
  private:
   int cpu_ = -1;
   cpu_set_t saved_mask_{};  ///< the thread's affinity before the pin
+};
+
+/// A TBB arena of `threads` threads (0: every hardware thread, resolve_thread_count) for timed
+/// work. With one thread the calling thread, which then runs all of the arena's work, is pinned to
+/// timing_cpu() for the arena's lifetime (TimingCpuScope); with more, nothing is pinned.
+class TimingArena {
+ public:
+  explicit TimingArena(int threads);
+
+  int threads() const { return threads_; }
+  template <class F>
+  decltype(auto) execute(F&& f) {
+    return arena_.execute(std::forward<F>(f));
+  }
+
+ private:
+  int threads_;
+  TimingCpuScope pinned_;
+  tbb::task_arena arena_;
 };
 
 }  // namespace raylab

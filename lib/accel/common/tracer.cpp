@@ -3,7 +3,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <time.h>
 
@@ -38,9 +37,7 @@ TraceResult trace_rays(const Primitive& prim, const std::vector<Ray>& rays, cons
   else result.hits.assign(n, Hit{});
   tbb::combinable<RayCounters> counters;
   std::atomic<std::size_t> hit_count{0};
-  const int threads = resolve_thread_count(options.threads);
-  const TimingCpuScope pinned(threads == 1);
-  tbb::task_arena arena(threads);
+  TimingArena arena(options.threads);
   const double cpu_start = thread_cpu_now();
   const auto start = std::chrono::steady_clock::now();
   arena.execute([&] {
