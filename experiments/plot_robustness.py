@@ -70,11 +70,19 @@ def plot_certainty(out: pathlib.Path) -> None:
     fig, ax = plt.subplots(figsize=(2.0 + 1.3 * len(cases), 4.0))
     width = 0.8 / len(paths)
     for k, p in enumerate(paths):
-        values = [df[(df["scene"] == s) & (df["rays"] == r) & (df["accel"] == p)]["mrays_per_s"].max() for s, r in cases]
-        ax.bar(np.arange(len(cases)) + (k - (len(paths) - 1) / 2) * width, values, width, label=p)
+        rows = [df[(df["scene"] == s) & (df["rays"] == r) & (df["accel"] == p)].iloc[0] for s, r in cases]
+        values = np.array([row["mrays_per_s"] for row in rows], float)
+        errors = None
+        if "ns_per_ray_lo" in df.columns:  # the 95% interval of the median time, as throughput
+            low = np.array([1e3 / row["ns_per_ray_hi"] for row in rows], float)
+            high = np.array([1e3 / row["ns_per_ray_lo"] for row in rows], float)
+            errors = [np.maximum(values - low, 0), np.maximum(high - values, 0)]
+        ax.bar(np.arange(len(cases)) + (k - (len(paths) - 1) / 2) * width, values, width, label=p, yerr=errors,
+               capsize=2, error_kw={"linewidth": 0.8})
     ax.set_xticks(range(len(cases)), [f"{s}\n{r}" for s, r in cases], fontsize=7)
     ax.set_ylabel("million rays per second, 1 thread")
-    ax.set_title("The cost of certainty: fast, watertight and certified (default) BVH against Embree")
+    ax.set_title("The cost of certainty: fast, watertight and certified (default) BVH against Embree\n"
+                 "(bars: medians over the rounds; whiskers: 95% intervals)", fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out / "certainty.png", dpi=120)
