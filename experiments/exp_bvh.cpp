@@ -455,6 +455,10 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
   for (std::size_t i = 0; i <= angles.size() + 1; ++i) md += "---|";
   md += "\n";
   const auto ns_cell = [](const IntervalEstimate& i) { return fmt::format("{:.0f} [{:.0f}, {:.0f}]", i.value, i.lo, i.hi); };
+  const auto slowdown_cell = [](const IntervalEstimate& i) {
+    return fmt::format("{:.2f}× [{:.2f}, {:.2f}]", i.value, i.lo, i.hi);
+  };
+  std::map<std::string, IntervalEstimate> slowdown_at_45;  // per structure, the per-round ratio t(45°)/t(0°)
   for (const auto& a : accels) {
     md += "| `" + a + "` |";
     for (const auto& [angle, t] : by_accel[a])
@@ -463,21 +467,31 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
     const IntervalEstimate slowdown = fit_each_round({v.front().second.ns_rounds, v.back().second.ns_rounds},
                                             [](const std::vector<double>& y) { return std::vector<double>{y[1] / y[0]}; })
                                   .parameters[0];
-    md += fmt::format(" {:.2f}× [{:.2f}, {:.2f}] | {} |\n", slowdown.value, slowdown.lo, slowdown.hi, slowdown.replicates);
+    slowdown_at_45[a] = slowdown;
+    md += fmt::format(" {} | {} |\n", slowdown_cell(slowdown), slowdown.replicates);
   }
   const auto& b = by_accel["bvh"];
   const auto& sb = by_accel["bvh:builder=spatial"];
   const auto& kd = by_accel["kdtree"];
-  const double lost = b.back().second.ns - b.front().second.ns;
   md += fmt::format(
       "\nRotated, a wall's bounding box is mostly empty, so the object-split BVH's boxes overlap and tests per ray "
-      "grow from {:.1f} to {:.1f}: the lecture's slowdown, smaller here ({:.2f}×) than pbrt's 4.19× on its own "
+      "grow from {:.1f} to {:.1f}: the lecture's slowdown, smaller here ({}) than pbrt's 4.19× on its own "
       "scene and rays.",
-      b.front().second.tests, b.back().second.tests, b.back().second.ns / b.front().second.ns);
-  if (lost > 0)
+      b.front().second.tests, b.back().second.tests, slowdown_cell(slowdown_at_45["bvh"]));
+  // SBVH's share of the binned BVH's extra time at 45°, round by round: (t_bvh(45°) − t_sbvh(45°)) /
+  // (t_bvh(45°) − t_bvh(0°)); undefined (NaN, left out) in a round where the BVH did not slow down.
+  const BootstrapFit recovered = fit_each_round(
+      {b.front().second.ns_rounds, b.back().second.ns_rounds, sb.back().second.ns_rounds},
+      [](const std::vector<double>& y) {
+        const double lost = y[1] - y[0];
+        return std::vector<double>{lost > 0 ? (y[1] - y[2]) / lost : std::numeric_limits<double>::quiet_NaN(), lost};
+      });
+  const IntervalEstimate& share = recovered.parameters[0];
+  if (share.defined())
     md += fmt::format(" SBVH's spatial splits refine the boxes (the lecture's work-around): {:.1f} tests per ray at "
-                      "45°, recovering {:.0f}% of the binned BVH's extra {:.0f} ns/ray.",
-                      sb.back().second.tests, 100.0 * (b.back().second.ns - sb.back().second.ns) / lost, lost);
+                      "45°, recovering {:.0f}% [{:.0f}%, {:.0f}%] of the binned BVH's extra {} ns/ray ({} rounds).",
+                      sb.back().second.tests, 100 * share.value, 100 * share.lo, 100 * share.hi,
+                      format_interval(recovered.parameters[1]), share.replicates);
   md += fmt::format(
       " The kd-tree with exact clipping cuts the walls into cells and does not lose its speed ({:.1f} tests per ray at "
       "45°); it is slowest at 0° ({:.1f} tests per ray), the one angle where every wall face lies in a candidate split "
@@ -532,12 +546,11 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
   md += fmt::format("\nFitted round by round (medians over the rounds): `bvh` b/a = {}, `bvh:builder=spatial` b/a = {}, b(`bvh`) − "
                     "b(`bvh:builder=spatial`) = {} ns.\n",
                     format_interval(bvh_ba), format_interval(sbvh_ba), format_interval(recovery));
-  const auto& b_rows = by_accel["bvh"];
   verdicts.push_back({"7a", "rotated walls slow the BVH; refined boxes (SBVH) recover", verdict,
                       fmt::format("ns/ray = a + b·(box growth): `bvh` b/a = {}, `bvh:builder=spatial` b/a = {}, "
-                                  "b(bvh) − b(SBVH) = {} ns; slowdown at 45°: {:.2f}× (pbrt 4.19×); {} rounds",
+                                  "b(bvh) − b(SBVH) = {} ns; slowdown at 45°: {} (pbrt 4.19×); {} rounds",
                                   format_interval(bvh_ba), format_interval(sbvh_ba), format_interval(recovery),
-                                  b_rows.back().second.ns / b_rows.front().second.ns, bvh_ba.replicates),
+                                  slowdown_cell(slowdown_at_45["bvh"]), bvh_ba.replicates),
                       "claim-7a", slows,
                       Threshold{"(1) the 95% interval of `bvh`'s b/a above 0 and (2) that of b(`bvh`) − "
                                 "b(`bvh:builder=spatial`) above 0; (2) decides between confirmed and holds only under "
@@ -588,8 +601,11 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
         "with the test cost measured cache-warm, a lower bound, so the traversal share (the rest) is an upper bound; "
         "a share of 0% means the clamp was hit, i.e. the cache-warm test cost times the tests exceeds the trace "
         "time.\n\n";
-  md += "| scene | structure | triangles | tests/ray | nodes/ray | ns/ray [95%] | triangle share (≥) | traversal share (≤) | "
-        "ns per node visit | Embree ns/ray [95%] | rounds |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  md += "Every interval in the table is a 95% percentile bootstrap over the rounds (the trace's and the triangle "
+        "test's rounds resampled, 2000 resamples, fixed seed).\n\n"
+        "| scene | structure | triangles | tests/ray | nodes/ray | ns/ray [95%] | triangle share (≥) [95%] | "
+        "traversal share (≤) [95%] | ns per node visit [95%] | Embree ns/ray [95%] | rounds |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n";
   const std::vector<std::string> scenes = {"subdivided:of=cgal:bunny00,levels=1", "subdivided:of=cgal:bunny00,levels=3",
                                            std::string(kLectureInstancedSceneSpec)};
   const std::string rays = opt.full() ? "diffuse:131072" : "diffuse:16384";
@@ -610,11 +626,21 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
       auto [accel, build_s] = build(spec, scene, 0);
       const Trace t = run.trace(*accel, s, rays, 1);
       const auto [tri, trav] = run.row("shares", s, rays, spec, "", 1, build_s, *accel, t, tri_ns);
-      const double visit_ns = t.nodes + t.leaves > 0 ? t.ns * trav / (t.nodes + t.leaves) : 0.0;
-      md += fmt::format("| {} | `{}` | {:.3g} | {:.1f} | {:.1f} | {:.0f} [{:.0f}, {:.0f}] | {:.1f}% | {:.1f}% | {:.2f} | "
+      const double visits = t.nodes + t.leaves;
+      const double visit_ns = visits > 0 ? t.ns * trav / visits : 0.0;
+      // The shares and the time per visit over the rounds: the trace's and the test's rounds resampled.
+      const BootstrapFit split = bootstrap_fit({t.ns_rounds, test_rounds.back()}, [&](const std::vector<double>& m) {
+        const double triangle = std::min(1.0, t.tests * m[1] / m[0]);
+        return std::vector<double>{triangle, 1.0 - triangle, visits > 0 ? m[0] * (1.0 - triangle) / visits : 0.0};
+      });
+      const auto percent = [](const IntervalEstimate& i) {
+        return fmt::format("{:.1f}% [{:.1f}, {:.1f}]", 100 * i.value, 100 * i.lo, 100 * i.hi);
+      };
+      md += fmt::format("| {} | `{}` | {:.3g} | {:.1f} | {:.1f} | {:.0f} [{:.0f}, {:.0f}] | {} | {} | {} | "
                         "{:.0f} [{:.0f}, {:.0f}] | {} |\n",
-                        s, spec, scene->total_primitive_count(), t.tests, t.nodes, t.ns, t.ns_ci.lo, t.ns_ci.hi, 100 * tri,
-                        100 * trav, visit_ns, t.embree_ns, t.embree_ci.lo, t.embree_ci.hi, t.ns_ci.replicates);
+                        s, spec, scene->total_primitive_count(), t.tests, t.nodes, t.ns, t.ns_ci.lo, t.ns_ci.hi,
+                        percent(split.parameters[0]), percent(split.parameters[1]), format_interval(split.parameters[2]),
+                        t.embree_ns, t.embree_ci.lo, t.embree_ci.hi, t.ns_ci.replicates);
       share_fit[a].first.push_back(scene->total_primitive_count());
       share_fit[a].second.push_back(trav);
       if (a == "bvh") {
