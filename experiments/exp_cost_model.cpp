@@ -527,15 +527,22 @@ class CostModelExperiment {
     }
     md += "\n### Build time\n\nSeconds to build, per accelerator spec, a·N·log2 N + b·N (+ c where selection keeps it), "
           "fitted with Ceres on the data set's builds (lib/cost/build_time_model.h); held-out: leave one scene out "
-          "(goal: MAPE ≤ 15%). `raylab predict` prints the prediction and its 90% interval.\n\n"
-          "| accel | rows | N range | a (ns per N·log2 N) | b (ns per N) | held-out MAPE | coverage |\n"
+          "(goal: MAPE ≤ 15%). `raylab predict` prints the prediction and its 90% interval. a and b carry the fit's "
+          "± one standard error; a term the selection dropped reads *dropped*. Each row's build was timed once by the "
+          "sweep, so these errors are the scatter of single builds about the model.\n\n"
+          "| accel | rows | N range | a (ns per N·log2 N) ± s.e. | b (ns per N) ± s.e. | held-out MAPE | coverage |\n"
           "|---|---|---|---|---|---|---|\n";
     int build_met = 0;
     for (const auto& [spec, b] : set_.build) {
       build_met += b.held_out_mape <= 0.15;
-      md += fmt::format("| `{}` | {} | {:.3g}..{:.3g} | {:.3g} | {:.3g} | {} | {} |\n", spec, b.rows, b.range_lo,
-                        b.range_hi, 1e9 * b.value_of("n_log2_n"), 1e9 * b.value_of("n"), pct_or(b.held_out_mape),
-                        pct_or(b.coverage90));
+      const auto term = [&](const char* name) {
+        if (std::find(b.terms.begin(), b.terms.end(), name) == b.terms.end()) return std::string("dropped");
+        const double se = b.std_error_of(name);
+        return std::isfinite(se) ? format_with_error(1e9 * b.value_of(name), 1e9 * se)
+                                 : fmt::format("{:.3g} (s.e. n/a)", 1e9 * b.value_of(name));
+      };
+      md += fmt::format("| `{}` | {} | {:.3g}..{:.3g} | {} | {} | {} | {} |\n", spec, b.rows, b.range_lo, b.range_hi,
+                        term("n_log2_n"), term("n"), pct_or(b.held_out_mape), pct_or(b.coverage90));
     }
     md += fmt::format("\nBuild-time model within 15% held out: {} of {} specs.\n\n", build_met, set_.build.size());
     return md;

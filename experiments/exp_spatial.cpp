@@ -35,6 +35,7 @@ struct Measured {
   double build_s = 0, ns = 0, embree_ns = 0, nodes_per_ray = 0, leaves_per_ray = 0, tests_per_ray = 0;
   AccelStats stats;
   IntervalEstimate ns_ci, ratio_ci;  ///< medians over the replicate rounds with 95% bootstrap intervals (ratio: Embree's over ours)
+  IntervalEstimate build_ci;         ///< build seconds: the median over kBuildRounds builds with its interval
   std::vector<double> ratios;        ///< Embree's time over ours, one per replicate round
   /// Throughput relative to Embree: the median per-round ratio when replicated, else the ratio of the times.
   double ratio() const { return ratio_ci.defined() ? ratio_ci.value : (ns > 0 ? embree_ns / ns : 0); }
@@ -48,6 +49,9 @@ constexpr int kWarmRepeats = 8;
 /// and Embree in turn on the same rays; ns/ray and the throughput ratio are medians over the rounds
 /// with 95% bootstrap intervals.
 constexpr int kTraceRounds = 5;
+/// Builds per structure in Runner::run (wall clock: the builders may use every thread); Embree's
+/// one build is not replicated.
+constexpr int kBuildRounds = 3;
 
 std::vector<Ray> repeat_each(const std::vector<Ray>& rays, int times) {
   std::vector<Ray> out;
@@ -102,22 +106,28 @@ class Runner {
     return *e;
   }
 
-  /// Builds `accel_spec` on the scene, traces the rays counted and timed, and writes a CSV row.
-  /// `build_repeats` > 0: the build runs on this thread and is timed in its CPU time, best of that
-  /// many builds; 0: one build, wall clock (Embree builds on its own threads).
+  /// Builds `accel_spec` on the scene kBuildRounds times (Embree once), wall clock, traces the rays
+  /// counted and timed, and writes a CSV row.
   Measured run(const std::string& part, const std::string& scene_spec, const std::string& ray_spec,
-               const std::string& accel_spec, const std::string& param, bool trace = true, int build_repeats = 0) {
+               const std::string& accel_spec, const std::string& param, bool trace = true) {
     progress("spatial: " + part + " " + scene_spec + " " + accel_spec);
     Measured m;
     const auto s = scene(scene_spec);
     m.triangles = s->mesh.size();
     std::unique_ptr<Aggregate> accel;
     const auto build = [&] { accel = make_accelerator(accel_spec, s); };
-    m.build_s = build_repeats > 0 ? thread_cpu_seconds_of(build) : seconds_of(build);
-    for (int rep = 1; rep < build_repeats; ++rep) {
+    std::vector<double> build_seconds;
+    for (int k = 0; k < (accel_spec == "embree" ? 1 : kBuildRounds); ++k) {
       accel.reset();
-      m.build_s = std::min(m.build_s, thread_cpu_seconds_of(build));
+      build_seconds.push_back(seconds_of(build));
     }
+    if (build_seconds.size() > 1) {
+      m.build_ci = bootstrap_median(build_seconds);
+    } else {
+      m.build_ci.value = build_seconds.front();
+      m.build_ci.replicates = 1;
+    }
+    m.build_s = m.build_ci.value;
     m.stats = accel->stats();
     const auto& r = rays(scene_spec, ray_spec);
     if (trace) {
@@ -140,7 +150,8 @@ class Runner {
     }
     csv_.row(part, scene_spec, m.triangles, ray_spec, r.size(), accel_spec, param, m.build_s, m.stats.nodes, m.stats.bytes,
              m.stats.sah_cost, m.nodes_per_ray, m.leaves_per_ray, m.tests_per_ray, m.ns, m.embree_ns, m.ratio(),
-             m.ns_ci.lo, m.ns_ci.hi, m.ratio_ci.lo, m.ratio_ci.hi, 0.0, 0.0, m.ns_ci.replicates);
+             m.ns_ci.lo, m.ns_ci.hi, m.ratio_ci.lo, m.ratio_ci.hi, m.build_ci.defined() ? m.build_ci.lo : 0.0,
+             m.build_ci.defined() ? m.build_ci.hi : 0.0, m.ns_ci.replicates);
     return m;
   }
 
@@ -243,13 +254,21 @@ class Runner {
   std::map<std::string, std::unique_ptr<Aggregate>> embree_;
 };
 
+/// "0.706 [0.700, 0.720]" over the builds, or "0.706 (1 build)".
+std::string build_cell(const Measured& m) {
+  return m.build_ci.defined() ? fmt::format("{:.3f} [{:.3f}, {:.3f}]", m.build_ci.value, m.build_ci.lo, m.build_ci.hi)
+                              : fmt::format("{:.3f} (1 build)", m.build_s);
+}
+
 std::string row(const std::string& first, const Measured& m) {
-  return fmt::format("| {} | {:.3f} | {} | {:.1f} | {:.2f} | {:.2f} | {:.0f} [{:.0f}, {:.0f}] | {:.2f} [{:.2f}, {:.2f}] | {} |\n",
-                     first, m.build_s, m.stats.nodes, m.stats.sah_cost, m.tests_per_ray, m.nodes_per_ray, m.ns,
+  return fmt::format("| {} | {} | {} | {:.1f} | {:.2f} | {:.2f} | {:.0f} [{:.0f}, {:.0f}] | {:.2f} [{:.2f}, {:.2f}] | {} |\n",
+                     first, build_cell(m), m.stats.nodes, m.stats.sah_cost, m.tests_per_ray, m.nodes_per_ray, m.ns,
                      m.ns_ci.lo, m.ns_ci.hi, m.ratio_ci.value, m.ratio_ci.lo, m.ratio_ci.hi, m.ns_ci.replicates);
 }
-const char* kHeader =
-    "| build (s) | nodes | SAH cost | tests/ray | nodes/ray | ns/ray [95%] | throughput vs Embree [95%] | rounds |\n";
+const std::string kHeader = fmt::format(
+    "| build (s) [95%, {} builds] | nodes | SAH cost | tests/ray | nodes/ray | ns/ray [95%] | throughput vs Embree "
+    "[95%] | rounds |\n",
+    kBuildRounds);
 const char* kRule = "|---|---|---|---|---|---|---|---|---|\n";
 
 
