@@ -24,11 +24,16 @@ def plot(out: pathlib.Path) -> None:
         fig, (ax_t, ax_n) = plt.subplots(1, 2, figsize=(13, 4.8))
         for scene, g in res.groupby("scene"):
             g = g.sort_values("d")
-            if "ns_per_ray_lo" in g:  # medians of replicate rounds: the interval of ns/ray, over Embree's median
+            if "ratio_to_embree_lo" in g:  # the median of the per-round ratios with its 95% interval
+                r = g["ratio_to_embree"].to_numpy(float)
+                low, high = g["ratio_to_embree_lo"].to_numpy(float), g["ratio_to_embree_hi"].to_numpy(float)
+                line = ax_t.errorbar(g["d"], r, yerr=[np.maximum(r - low, 0), np.maximum(high - r, 0)],
+                                     marker="o", linestyle="none", capsize=2, label=f"{scene} (median, 95% interval)").lines[0]
+            elif "ns_per_ray_lo" in g:  # older data: the interval of ns/ray over Embree's median
                 r = g["ratio_to_embree"].to_numpy(float)
                 e = g["embree_ns_per_ray"].to_numpy(float)
-                line = ax_t.errorbar(g["d"], r, yerr=[r - g["ns_per_ray_lo"].to_numpy(float) / e,
-                                                      g["ns_per_ray_hi"].to_numpy(float) / e - r],
+                line = ax_t.errorbar(g["d"], r, yerr=[np.maximum(r - g["ns_per_ray_lo"].to_numpy(float) / e, 0),
+                                                      np.maximum(g["ns_per_ray_hi"].to_numpy(float) / e - r, 0)],
                                      marker="o", linestyle="none", capsize=2, label=f"{scene} (median, 95% interval)").lines[0]
             else:
                 line, = ax_t.plot(g["d"], g["ratio_to_embree"], marker="o", linestyle="none", label=scene)
