@@ -73,13 +73,24 @@ class NoiseFloorDrift(unittest.TestCase):
     def test_overlapping_intervals_held(self):
         line = self.line(noise_floor(0.80, 0.79, 0.81), noise_floor(0.805, 0.80, 0.82))
         self.assertIn("0.800 [0.790, 0.810]", line)
-        self.assertIn("held", line)
-        self.assertNotIn("changed", line)
+        self.assertIn("speed held", line)
+        self.assertNotIn("changed during the run", line)
+        self.assertNotIn("drifted by", line)
 
     def test_disjoint_intervals_changed(self):
         line = self.line(noise_floor(0.713, 0.708, 0.718, 309.5, 220.3), noise_floor(0.80, 0.79, 0.81))
-        self.assertIn("changed during the run", line)
+        self.assertIn("changed during the run** (12.2%)", line)
         self.assertIn("(310 and 220 ns/ray)", line)
+
+    def test_disjoint_intervals_within_the_threshold_drifted(self):
+        # 1.5%: the intervals of 20 rounds are narrow enough to separate it, yet it is no change of state.
+        line = self.line(noise_floor(0.800, 0.798, 0.802), noise_floor(0.812, 0.810, 0.814))
+        self.assertIn("drifted by 1.5%", line)
+        self.assertNotIn("changed during the run", line)
+        self.assertIn("rule, stated before the figures", line)
+        # Just beyond the threshold it is a change.
+        beyond = self.line(noise_floor(0.800, 0.798, 0.802), noise_floor(0.8416, 0.840, 0.843))
+        self.assertIn("changed during the run** (5.2%)", beyond)
 
     def test_missing_or_malformed_says_nothing(self):
         self.assertEqual(self.line(None, noise_floor(0.8, 0.79, 0.81)), "")
