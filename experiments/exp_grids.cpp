@@ -213,10 +213,7 @@ std::vector<Measured> measure_alternated(const std::vector<std::string>& accel_s
 /// t(m) / t(reference), taken per round and the median over the rounds with its 95% bootstrap
 /// interval; both from the same alternated rounds (measure_alternated).
 IntervalEstimate time_ratio(const Measured& m, const Measured& reference) {
-  std::vector<double> per_round;
-  for (std::size_t r = 0; r < m.ns_rounds.size() && r < reference.ns_rounds.size(); ++r)
-    per_round.push_back(m.ns_rounds[r] / reference.ns_rounds[r]);
-  return bootstrap_median(per_round);
+  return bootstrap_median(per_round_ratios(m.ns_rounds, reference.ns_rounds));
 }
 
 /// `specs` and Embree in the same alternated rounds (measure_alternated): the specs' Measured, then
@@ -793,11 +790,7 @@ int main(int argc, char** argv) {
                     0.0, 0.0, 0.0, count_scatter_s, refs * sizeof(std::uint32_t), 0, 0.0, 0.0, 0.0, kRounds);
             // The build over a floor, round by round. Below a millisecond the floor reuses the heap's
             // pages and the ratio says nothing.
-            const auto ratio = [&](std::size_t k) {
-              std::vector<double> r;
-              for (int i = 0; i < kRounds; ++i) r.push_back(t[0][i] / t[k][i]);
-              return bootstrap_median(r);
-            };
+            const auto ratio = [&](std::size_t k) { return bootstrap_median(per_round_ratios(t[0], t[k])); };
             const auto ratio_text = [&](std::size_t k) {
               return median(t[k]) < 1e-3 ? std::string("–") : format_interval(ratio(k));
             };
@@ -827,10 +820,8 @@ int main(int argc, char** argv) {
                return s;
              }},
             kRounds);
-        std::vector<double> per_round;
-        for (int i = 0; i < kRounds; ++i) per_round.push_back(t[1][i] / t[0][i]);
         const IntervalEstimate uniform_s = bootstrap_median(t[0]), nested_s = bootstrap_median(t[1]),
-                               ratio = bootstrap_median(per_round);
+                               ratio = bootstrap_median(per_round_ratios(t[1], t[0]));
         csv.row("goal_nested_build", big.label, big.spec, big.scene->primitive_count(), "nested-grid", 3.0, 0, 0.0, 0.0,
                 0.0, 0.0, 0.0, 0.0, nested_s.value, nested_stats.bytes, nested_stats.nodes, 0.0, nested_s.lo,
                 nested_s.hi, kRounds);

@@ -592,9 +592,7 @@ int main(int argc, char** argv) {
       // CPU time of the building thread (the kd-tree builds on it): robust to a shared machine.
       const GoalBuilds b = run.goal_builds(big, kGoalBuildRounds);
       const auto per_round = [&](std::size_t num, std::size_t den) {
-        std::vector<double> r;
-        for (int k = 0; k < kGoalBuildRounds; ++k) r.push_back(b.seconds[num][k] / b.seconds[den][k]);
-        return bootstrap_median(r);
+        return bootstrap_median(per_round_ratios(b.seconds[num], b.seconds[den]));
       };
       md += fmt::format(
           "Event-sweep build (`sweep=events`, the default) of `{}` ({} triangles), single thread, CPU time of the "

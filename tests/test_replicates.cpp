@@ -23,6 +23,14 @@ TEST(Replicates, MedianAndCoefficientOfVariation) {
   EXPECT_TRUE(std::isnan(coefficient_of_variation({1})));
 }
 
+TEST(Replicates, PerRoundRatiosPairTheRoundsAndRefuseUnequalCounts) {
+  EXPECT_EQ(per_round_ratios({2.0, 9.0, 4.0}, {1.0, 3.0, 8.0}), (std::vector<double>{2.0, 3.0, 0.5}));
+  EXPECT_THROW(per_round_ratios({1.0, 2.0}, {1.0}), std::invalid_argument);
+  ReplicateTiming t;
+  t.ns = {{10.0, 20.0}, {5.0, 40.0}};
+  EXPECT_EQ(t.ratios(1, 0), (std::vector<double>{0.5, 2.0}));
+}
+
 TEST(Replicates, BootstrapMedianIntervalHoldsTheMedianAndWidensWithTheSpread) {
   const std::vector<double> tight = {1.00, 1.01, 0.99, 1.02, 0.98, 1.00, 1.01};
   const std::vector<double> loose = {1.00, 1.30, 0.70, 1.40, 0.60, 1.00, 1.20};

@@ -146,12 +146,17 @@ IntervalEstimate geometric_mean_by_round(const std::vector<std::vector<double>>&
   return bootstrap_median(by_round, resamples, seed);
 }
 
-std::vector<double> ReplicateTiming::ratios(std::size_t numerator, std::size_t denominator) const {
-  const auto& a = ns.at(numerator);
-  const auto& b = ns.at(denominator);
-  std::vector<double> r(a.size());
-  for (std::size_t i = 0; i < a.size(); ++i) r[i] = a[i] / b[i];
+std::vector<double> per_round_ratios(const std::vector<double>& numerator, const std::vector<double>& denominator) {
+  if (numerator.size() != denominator.size())
+    throw std::invalid_argument("per_round_ratios: " + std::to_string(numerator.size()) + " rounds against " +
+                                std::to_string(denominator.size()));
+  std::vector<double> r(numerator.size());
+  for (std::size_t i = 0; i < r.size(); ++i) r[i] = numerator[i] / denominator[i];
   return r;
+}
+
+std::vector<double> ReplicateTiming::ratios(std::size_t numerator, std::size_t denominator) const {
+  return per_round_ratios(ns.at(numerator), ns.at(denominator));
 }
 
 std::vector<std::vector<double>> alternate_rounds(const std::vector<std::function<double()>>& measure, int rounds) {

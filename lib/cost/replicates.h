@@ -89,6 +89,10 @@ struct ReplicateOptions {
   bool any_hit = false;            ///< occluded() queries instead of intersect()
 };
 
+/// numerator[r] / denominator[r] for every round r of two figures measured in the same alternated
+/// rounds. Throws std::invalid_argument when their round counts differ.
+std::vector<double> per_round_ratios(const std::vector<double>& numerator, const std::vector<double>& denominator);
+
 /// Times per ray of several contenders over alternated rounds: ns[c][r] is contender c in round r.
 struct ReplicateTiming {
   std::vector<std::vector<double>> ns;
