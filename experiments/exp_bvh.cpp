@@ -131,6 +131,12 @@ int rounds_of(const Options& opt) { return opt.full() ? 9 : 7; }
 /// over kWallsTimeFactor × the per-round time of the other timings.
 int walls_rounds_of(const Options& opt) { return opt.full() ? 15 : 11; }
 constexpr double kWallsTimeFactor = 5.0;
+
+/// The triangle tests' share of a trace's time, a lower bound (the test time is cache-warm):
+/// min(1, tests per ray × ns per test / ns per ray). The traversal's share is the rest.
+double triangle_share(double tests_per_ray, double ns_per_test, double ns_per_ray) {
+  return std::min(1.0, tests_per_ray * ns_per_test / ns_per_ray);
+}
 /// Alternated builds of each builder (their medians and intervals) in the comparison with Embree.
 int build_rounds_of(const Options& opt) { return opt.full() ? 7 : 5; }
 
@@ -234,7 +240,7 @@ class Runner {
     const AccelStats st = accel.stats();
     double tri_share = -1, trav_share = -1;
     if (tri_ns >= 0 && t.ns > 0 && accel.reports_counters()) {
-      tri_share = std::min(1.0, t.tests * tri_ns / t.ns);
+      tri_share = triangle_share(t.tests, tri_ns, t.ns);
       trav_share = 1.0 - tri_share;
     }
     csv_.row(part, scene_spec, tris, ray_spec, rays(scene_spec, ray_spec).size(), accel_spec, param, threads, build_s,
@@ -625,12 +631,12 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
       progress("bvh: shares " + s + " " + spec);
       auto [accel, build_s] = build(spec, scene, 0);
       const Trace t = run.trace(*accel, s, rays, 1);
-      const auto [tri, trav] = run.row("shares", s, rays, spec, "", 1, build_s, *accel, t, tri_ns);
+      const double trav = run.row("shares", s, rays, spec, "", 1, build_s, *accel, t, tri_ns).second;
       const double visits = t.nodes + t.leaves;
       const double visit_ns = visits > 0 ? t.ns * trav / visits : 0.0;
       // The shares and the time per visit over the rounds: the trace's and the test's rounds resampled.
       const BootstrapFit split = bootstrap_fit({t.ns_rounds, test_rounds.back()}, [&](const std::vector<double>& m) {
-        const double triangle = std::min(1.0, t.tests * m[1] / m[0]);
+        const double triangle = triangle_share(t.tests, m[1], m[0]);
         return std::vector<double>{triangle, 1.0 - triangle, visits > 0 ? m[0] * (1.0 - triangle) / visits : 0.0};
       });
       const auto percent = [](const IntervalEstimate& i) {
@@ -691,7 +697,7 @@ std::string time_shares(Runner& run, const Options& opt, std::vector<Verdict>& v
   const BootstrapFit boot = bootstrap_fit(points, [&](const std::vector<double>& medians) {
     std::vector<double> share(n_scenes);
     for (std::size_t i = 0; i < n_scenes; ++i)
-      share[i] = 1.0 - std::min(1.0, tests[i] * medians[n_scenes + i] / medians[i]);
+      share[i] = 1.0 - triangle_share(tests[i], medians[n_scenes + i], medians[i]);
     return std::vector<double>{
         fit_basis(sizes, share, [](double n) { return std::log10(n); }, ResidualKind::absolute).values[1]};
   });
