@@ -30,6 +30,7 @@
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
+#include "accel/common/timing_cpu.h"
 #include "cost/auto_accel.h"
 #include "cost/model_file.h"
 #include "cost/model_fit.h"
@@ -73,6 +74,10 @@ const std::vector<std::pair<std::string, std::string>> kTextbook = {
     {"bvh8", "bvh:c_trav=1,c_isect=80"},
     {"bvh8", "bvh:c_trav=1,c_isect=1.5"},
 };
+
+bool is_textbook(const std::string& accel) {
+  return std::any_of(kTextbook.begin(), kTextbook.end(), [&](const auto& t) { return t.second == accel; });
+}
 
 double geomean(const std::vector<double>& v) {
   if (v.empty()) return 0.0;
@@ -293,15 +298,10 @@ class CostModelExperiment {
       for (const std::string& kind : kRayKinds) {
         const auto a = make_accelerator("auto:model=" + model_path_ + ",rays=" + kind, sc);
         auto_choice_[{s, kind}] = dynamic_cast<const AutoAccelerator&>(*a).choice().chosen;
-        for (const double count : kAutoRayCounts) {
-          const auto counted =
-              make_accelerator(fmt::format("auto:model={},rays={},count={:.0f}", model_path_, kind, count), sc);
-          auto_totals_.push_back({s, kind, count, dynamic_cast<const AutoAccelerator&>(*counted).choice()});
-        }
+        time_auto_totals(s, sc, kind, rays.at(kind));
       }
       builders_for(s, sc, rays);
     }
-    heldout_measured_ = heldout_;
     heldout_ = with_fit_target(heldout_, set_.target);
     for (const std::string& s : auto_overhead_scenes(opt_.full())) {
       progress("exp_cost_model: auto's choosing time on " + s);
@@ -309,6 +309,72 @@ class CostModelExperiment {
       const auto a = make_accelerator(fmt::format("auto:model={},rays=diffuse,count=1000000", model_path_), sc);
       auto_overhead_.push_back({s, static_cast<double>(sc->total_primitive_count()),
                                 dynamic_cast<const AutoAccelerator&>(*a).choice()});
+    }
+  }
+
+  /// `auto:rays=KIND,count=N` for every N of kAutoRayCounts against the held-out sweep's candidate
+  /// of least build + N × ns per ray (`best`), in kAutoRounds rounds. Builds: each round builds
+  /// every N's auto (choosing, its builds and its sampling pass) and its `best` in turn, wall
+  /// clock on one thread. Traces: every structure auto chose in any round and every `best`, built
+  /// once, in kAutoRounds alternated rounds on the sweep's rays. Round r's total is its build plus
+  /// N × round r's ns per ray of what was built (auto: of its round-r choice).
+  void time_auto_totals(const std::string& s, const std::shared_ptr<const Scene>& sc, const std::string& kind,
+                        const std::vector<Ray>& rays) {
+    const std::size_t first = auto_totals_.size();
+    for (const double count : kAutoRayCounts) {
+      AutoTotal t;
+      t.scene = s, t.kind = kind, t.count = count;
+      double best_total = INFINITY;
+      for (const RunRecord& r : heldout_) {
+        if (r.scene != s || r.ray_kind != kind || is_textbook(r.accel)) continue;
+        const double total_s = r.build_s + count * r.ns_per_ray_min * 1e-9;
+        if (total_s < best_total) best_total = total_s, t.best = r.accel;
+      }
+      if (t.best.empty()) return;  // no candidate measured on this scene and ray kind
+      auto_totals_.push_back(std::move(t));
+    }
+    progress("exp_cost_model: auto:count=N on " + s + " " + kind + ", " + std::to_string(kAutoRounds) + " rounds");
+    std::vector<std::function<double()>> builds;
+    for (std::size_t i = first; i < auto_totals_.size(); ++i) {
+      AutoTotal& t = auto_totals_[i];
+      const std::string spec = fmt::format("auto:model={},rays={},count={:.0f}", model_path_, kind, t.count);
+      builds.push_back([&t, &sc, spec] {
+        TimingArena arena(1);
+        const auto start = std::chrono::steady_clock::now();
+        const auto a = arena.execute([&] { return make_accelerator(spec, sc, model_build_context()); });
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const AutoChoice& choice = dynamic_cast<const AutoAccelerator&>(*a).choice();
+        if (t.chosen.empty()) t.choice = choice;
+        t.chosen.push_back(choice.chosen);
+        return seconds;
+      });
+      builds.push_back([&t, &sc] { return build_structure(t.best, sc, 1).build_s; });
+    }
+    const std::vector<std::vector<double>> build_s = alternate_rounds(builds, kAutoRounds);
+    std::vector<std::string> traced;
+    for (std::size_t i = first; i < auto_totals_.size(); ++i)
+      for (const std::string& spec : auto_totals_[i].chosen_and_best())
+        if (std::find(traced.begin(), traced.end(), spec) == traced.end()) traced.push_back(spec);
+    std::vector<BuiltStructure> built;
+    std::vector<const Primitive*> contenders;
+    for (const std::string& spec : traced) built.push_back(build_structure(spec, sc, 1));
+    for (const BuiltStructure& b : built) contenders.push_back(b.accel.get());
+    ReplicateOptions ro;
+    ro.rounds = kAutoRounds;
+    ro.min_round_seconds = 0.02;
+    ro.any_hit = is_any_hit_ray_spec(kind);
+    const ReplicateTiming timing = time_replicates(contenders, rays, ro);
+    const auto ns = [&](const std::string& spec, int r) {
+      return timing.ns[std::find(traced.begin(), traced.end(), spec) - traced.begin()][r];
+    };
+    for (std::size_t i = first; i < auto_totals_.size(); ++i) {
+      AutoTotal& t = auto_totals_[i];
+      const std::size_t k = 2 * (i - first);
+      for (int r = 0; r < kAutoRounds; ++r) {
+        t.auto_total_s.push_back(build_s[k][r] + t.count * ns(t.chosen[r], r) * 1e-9);
+        t.best_total_s.push_back(build_s[k + 1][r] + t.count * ns(t.best, r) * 1e-9);
+      }
+      t.auto_build_s = build_s[k];
     }
   }
 
@@ -488,8 +554,7 @@ class CostModelExperiment {
       std::string best;
       for (const RunRecord& r : heldout_) {
         if (r.scene != s || r.ray_kind != kind) continue;
-        const bool textbook = std::any_of(kTextbook.begin(), kTextbook.end(), [&](const auto& t) { return t.second == r.accel; });
-        if (textbook) continue;
+        if (is_textbook(r.accel)) continue;
         if (r.accel == chosen) chosen_ns = r.ns_per_ray_min;
         if (r.ns_per_ray_min < best_ns) {
           best_ns = r.ns_per_ray_min;
@@ -602,65 +667,57 @@ class CostModelExperiment {
     return v;
   }
 
-  /// The whole cost of `auto:rays=KIND,count=N`: choosing, every build it made and N rays of what it
-  /// chose, against the candidate of least build + N rays, each from the held-out rows' measured
-  /// build seconds and ns per ray (the same measurement for both sides).
+  /// The whole cost of `auto:rays=KIND,count=N` against the best candidate's build + N rays, from
+  /// the rounds of time_auto_totals: per round, the two totals and their ratio.
   std::string auto_total_section() {
-    auto measured = [&](const std::string& s, const std::string& kind, const std::string& accel) -> const RunRecord* {
-      for (const RunRecord& r : heldout_measured_)
-        if (r.scene == s && r.ray_kind == kind && r.accel == accel) return &r;
-      return nullptr;
-    };
     // part total: ratio = auto total / best total; part overhead: ratio = choose s / build s of the choice.
-    CsvWriter csv(opt_.out + "/cost_auto.csv", {"part", "scene", "rays", "count", "method", "chosen", "built",
-                                                  "choose_s", "build_s", "auto_total_s", "best", "best_total_s",
-                                                  "ratio"});
+    CsvWriter csv(opt_.out + "/cost_auto.csv",
+                  {"part", "scene", "rays", "count", "method", "chosen", "built", "choose_s", "build_s", "auto_total_s",
+                   "auto_total_lo_s", "auto_total_hi_s", "best", "best_total_s", "best_total_lo_s", "best_total_hi_s",
+                   "ratio", "ratio_lo", "ratio_hi", "rounds"});
     std::string md = fmt::format(
         "### `auto` that pays for itself: choose + build + trace\n\n**Goal** (stated before the figures): `auto:rays="
-        "KIND,count=N`'s choosing time, plus the build of every structure it built, plus N × the measured time per ray "
-        "of its choice, within 10% of the best candidate's build + N × its time per ray, in at least 90% of the cases; "
-        "N = 10^4, 10^6 and 10^8 rays on each held-out scene and ray kind. Builds and times per ray are the held-out "
-        "rows' own measurements ({} rays per kind; the 10^8 figures extrapolate them), so both sides share one "
-        "measurement: one build and one sweep timing per candidate, without an interval (the table above retimes "
-        "the choice against the fastest in alternated rounds; its intervals show how far one sweep timing can "
-        "stray).\n\n"
-        "| scene | rays | N | auto chose | built | choose s | auto total s | best | best total s | ratio |\n"
-        "|---|---|---|---|---|---|---|---|---|---|\n",
-        opt_.full() ? 65536 : 16384);
-    int within = 0, total = 0;
+        "KIND,count=N`'s whole cost (choosing, every build it makes, its sampling pass, then N × the time per ray of "
+        "its choice) within 10% of the best candidate's build + N × its time per ray, in at least 90% of the cases; "
+        "N = 10^4, 10^6 and 10^8 rays on each held-out scene and ray kind. *Best* is the candidate of least build + N "
+        "rays in the held-out sweep. Both are measured in {} rounds: each round builds auto and *best* in turn (wall "
+        "clock, 1 thread), and every structure auto chose in any round and every *best* are traced in {} alternated "
+        "rounds on the sweep's {} rays per kind (the tracing thread's CPU time; the 10^6 and 10^8 figures scale "
+        "them). Round r's total is its build plus N × round r's time per ray; totals are medians and the ratio "
+        "(auto over best) the median of the per-round ratios, with 95% bootstrap intervals. A case is within 10% "
+        "when its whole interval is at most 1.10, beyond when none of it is, else not shown at this noise.\n\n"
+        "| scene | rays | N | auto chose | built | choose s | auto total s [95%] | best | best total s [95%] | "
+        "ratio [95%] | within 10% |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        kAutoRounds, kAutoRounds, opt_.full() ? 65536 : 16384);
+    int within = 0, beyond = 0, total = 0;
+    const auto seconds = [](const IntervalEstimate& x) {
+      return fmt::format("{:.4g} [{:.4g}, {:.4g}]", x.value, x.lo, x.hi);
+    };
     for (const AutoTotal& t : auto_totals_) {
-      const RunRecord* chosen = measured(t.scene, t.kind, t.choice.chosen);
-      if (!chosen) continue;  // a choice the held-out rows lack (a skipped candidate): not judged
-      double built_s = 0;
-      std::size_t built = 0;
-      for (const AutoCandidate& c : t.choice.candidates)
-        if (c.built || (t.choice.method == "built-all" && c.skipped.empty())) {
-          const RunRecord* r = measured(t.scene, t.kind, c.spec);
-          built_s += r ? r->build_s : c.measured_build_s;
-          ++built;
-        }
-      const double auto_total = t.choice.choose_s + built_s + t.count * chosen->ns_per_ray_min * 1e-9;
-      double best_total = INFINITY;
-      std::string best;
-      for (const RunRecord& r : heldout_measured_) {
-        if (r.scene != t.scene || r.ray_kind != t.kind) continue;
-        if (std::any_of(kTextbook.begin(), kTextbook.end(), [&](const auto& x) { return x.second == r.accel; })) continue;
-        const double total_s = r.build_s + t.count * r.ns_per_ray_min * 1e-9;
-        if (total_s < best_total) best_total = total_s, best = r.accel;
-      }
-      const double ratio = auto_total / best_total;
-      within += ratio <= 1.10;
+      std::map<std::string, int> chose;
+      for (const std::string& c : t.chosen) ++chose[c];
+      std::string chosen;
+      for (const auto& [spec, rounds] : chose)
+        chosen += (chosen.empty() ? "" : ", ") + fmt::format("`{}`", spec) +
+                  (chose.size() > 1 ? fmt::format(" ({} of {})", rounds, t.chosen.size()) : "");
+      const IntervalEstimate auto_total = bootstrap_median(t.auto_total_s), best_total = bootstrap_median(t.best_total_s);
+      const IntervalEstimate ratio = bootstrap_median(per_round_ratios(t.auto_total_s, t.best_total_s));
+      const bool in = ratio.hi <= 1.10, out = ratio.lo > 1.10;
+      within += in, beyond += out;
       ++total;
-      md += fmt::format("| {} | {} | {:.0e} | `{}` | {} | {:.4f} | {:.4g} | `{}` | {:.4g} | {:.2f} |\n", t.scene, t.kind,
-                        t.count, t.choice.chosen, built, t.choice.choose_s, auto_total, best, best_total, ratio);
-      csv.row("total", t.scene, t.kind, t.count, t.choice.method, t.choice.chosen, built, t.choice.choose_s, built_s,
-              auto_total, best, best_total, ratio);
+      md += fmt::format("| {} | {} | {:.0e} | {} | {} | {:.4f} | {} | `{}` | {} | {} | {} |\n", t.scene, t.kind, t.count,
+                        chosen, t.choice.candidates_built, t.choice.choose_s, seconds(auto_total), t.best,
+                        seconds(best_total), format_interval(ratio), in ? "yes" : out ? "no" : "not shown");
+      csv.row("total", t.scene, t.kind, t.count, t.choice.method, t.choice.chosen, t.choice.candidates_built,
+              t.choice.choose_s, median(t.auto_build_s), auto_total.value, auto_total.lo, auto_total.hi, t.best,
+              best_total.value, best_total.lo, best_total.hi, ratio.value, ratio.lo, ratio.hi, ratio.replicates);
     }
     md += fmt::format(
-        "\n`auto` within 10% of the best candidate's build + trace: **{} of {} cases ({})**; goal ≥ 90%: {}. Method: "
-        "{} (\"predicted\": chosen from the scene's features, the build-time and scene-level models, before any "
-        "build; \"built-all\": every candidate built).\n\n",
-        within, total, pct(total ? double(within) / total : 0.0),
+        "\n`auto` within 10% of the best candidate's build + trace by the intervals: **{} of {} cases ({})**; beyond "
+        "it: {}; not shown at this noise: {}; goal ≥ 90% within: {}. Method: {} (\"predicted\": chosen from the "
+        "scene's features, the build-time and scene-level models, before any build; \"built-all\": every candidate "
+        "built). *choose s* and *built* are the first round's.\n\n",
+        within, total, pct(total ? double(within) / total : 0.0), beyond, total - within - beyond,
         total && within >= 0.9 * total ? "met" : "not met",
         auto_totals_.empty() ? std::string("none") : auto_totals_.front().choice.method);
     md += "**Choosing time against the build it saves**, `auto:rays=diffuse,count=1e6` on scenes of 10^5 triangles "
@@ -675,7 +732,7 @@ class CostModelExperiment {
                         o.choice.candidates_built, o.choice.choose_s, build_s,
                         std::isfinite(build_s) ? pct(o.choice.choose_s / build_s) : std::string("n/a"));
       csv.row("overhead", o.scene, "diffuse", 1e6, o.choice.method, o.choice.chosen, o.choice.candidates_built,
-              o.choice.choose_s, build_s, NAN, "", NAN, o.choice.choose_s / build_s);
+              o.choice.choose_s, build_s, NAN, NAN, NAN, "", NAN, NAN, NAN, o.choice.choose_s / build_s, NAN, NAN, 1);
     }
     return md + "\n";
   }
@@ -751,11 +808,22 @@ class CostModelExperiment {
   std::vector<RunRecord> runs_, heldout_;
   std::map<std::pair<std::string, std::string>, std::string> auto_choice_;
   static constexpr int kAutoRounds = 5;  ///< alternated rounds of auto's choice against the fastest
-  /// `auto:rays=KIND,count=N` on a held-out scene: what it chose and built, and how long choosing took.
+  /// `auto:rays=KIND,count=N` on a held-out scene against `best`, the held-out sweep's candidate of
+  /// least build + count × ns per ray, over kAutoRounds rounds (time_auto_totals).
   struct AutoTotal {
     std::string scene, kind;
     double count;
-    AutoChoice choice;
+    std::string best;
+    AutoChoice choice;                  ///< the first round's
+    std::vector<std::string> chosen;    ///< per round
+    std::vector<double> auto_build_s;   ///< per round: choosing, auto's builds and its sampling pass
+    std::vector<double> auto_total_s;   ///< per round: auto_build_s + count × ns per ray of the round's choice
+    std::vector<double> best_total_s;   ///< per round: best's build + count × its ns per ray
+    std::vector<std::string> chosen_and_best() const {
+      std::vector<std::string> v = chosen;
+      v.push_back(best);
+      return v;
+    }
   };
   std::vector<AutoTotal> auto_totals_;
   struct AutoOverhead {
@@ -764,7 +832,6 @@ class CostModelExperiment {
     AutoChoice choice;
   };
   std::vector<AutoOverhead> auto_overhead_;
-  std::vector<RunRecord> heldout_measured_;
   /// The counters model's held-out MAPE over all rows and its 95% bootstrap interval over held-out scenes.
   struct PooledMape {
     double value = NAN, lo = NAN, hi = NAN;
