@@ -30,6 +30,7 @@ struct Measured {
   std::size_t bytes = 0, nodes = 0;
   std::vector<double> ns_rounds;  ///< ns/ray in each replicate round; `ns` is their median
   IntervalEstimate ns_ci;                 ///< the median's 95% bootstrap interval
+  IntervalEstimate build_ci;              ///< wall seconds to build over kBuildRounds rounds; `build_s` is its median
 };
 
 /// Replicate rounds of every trace timing: each round traces until min_seconds / kRounds of
@@ -39,6 +40,8 @@ constexpr int kRounds = 5;
 /// of the other timings: t(3)/t(d*) compares points of a flat curve near its minimum, so it takes
 /// more replicates than a ratio to Embree does.
 constexpr int kResolutionRounds = 15;
+/// Alternated rounds of the builds measure_alternated times (each round builds every spec in turn).
+constexpr int kBuildRounds = 5;
 constexpr double kResolutionTimeFactor = 3.0;
 
 /// Seconds (the thread's CPU time) to allocate `count` 32-bit values and write them once in
@@ -174,27 +177,35 @@ double count_scatter_seconds(const CellSequence& seq) {
   return best;
 }
 
-/// Builds each of `accel_specs` on `scene`, counts its operations on `rays`, and times them all in
-/// the same `rounds` alternated rounds (each round traces every structure in turn, each for at
-/// least min_seconds / rounds), so that a slow spell of a shared machine falls on every point of a
-/// curve alike. Returns one Measured per spec.
+/// Builds each of `accel_specs` on `scene` in kBuildRounds alternated rounds (wall clock; the last
+/// round's structures are kept), counts its operations on `rays`, and times them all in the same
+/// `rounds` alternated rounds (each round traces every structure in turn, each for at least
+/// min_seconds / rounds), so that a slow spell of a shared machine falls on every point of a curve
+/// alike. Returns one Measured per spec.
 std::vector<Measured> measure_alternated(const std::vector<std::string>& accel_specs,
                                          const std::shared_ptr<const Scene>& scene, const std::vector<Ray>& rays,
                                          double min_seconds, int rounds = kRounds) {
   std::vector<Measured> out(accel_specs.size());
-  std::vector<std::unique_ptr<Aggregate>> accels;
+  std::vector<std::unique_ptr<Aggregate>> accels(accel_specs.size());
+  std::vector<std::function<double()>> builds;
+  for (std::size_t i = 0; i < accel_specs.size(); ++i)
+    builds.push_back([&, i] {
+      accels[i].reset();  // the previous round's structure is not in memory while this one builds
+      return seconds_of([&] { accels[i] = make_accelerator(accel_specs[i], scene); });
+    });
+  const std::vector<std::vector<double>> build_s = alternate_rounds(builds, kBuildRounds);
   const double n = static_cast<double>(rays.size());
   for (std::size_t i = 0; i < accel_specs.size(); ++i) {
     Measured& m = out[i];
-    accels.emplace_back();
-    m.build_s = seconds_of([&] { accels.back() = make_accelerator(accel_specs[i], scene); });
-    const TraceResult counted = trace_rays(*accels.back(), rays, TraceOptions{1, true, false});
+    m.build_ci = bootstrap_median(build_s[i]);
+    m.build_s = m.build_ci.value;
+    const TraceResult counted = trace_rays(*accels[i], rays, TraceOptions{1, true, false});
     m.tests = static_cast<double>(counted.counters.prim_tests) / n;
     m.cells = static_cast<double>(counted.counters.nodes) / n;
     m.skips = static_cast<double>(counted.counters.mailbox_skips) / n;
     m.hit_rate = static_cast<double>(counted.hit_count) / n;
-    m.bytes = accels.back()->stats().bytes;
-    m.nodes = accels.back()->stats().nodes;
+    m.bytes = accels[i]->stats().bytes;
+    m.nodes = accels[i]->stats().nodes;
   }
   ReplicateOptions replicate;
   replicate.rounds = rounds;
@@ -251,7 +262,7 @@ int main(int argc, char** argv) {
                   {"experiment", "scene", "scene_spec", "primitives", "accel", "d", "rays", "ns_per_ray",
                    "embree_ns_per_ray", "ratio_to_embree", "prim_tests_per_ray", "cells_per_ray",
                    "mailbox_skips_per_ray", "build_s", "bytes", "cells", "hit_rate", "ns_per_ray_lo", "ns_per_ray_hi",
-                   "rounds", "ratio_to_embree_lo", "ratio_to_embree_hi"});
+                   "rounds", "ratio_to_embree_lo", "ratio_to_embree_hi", "build_s_lo", "build_s_hi", "build_rounds"});
     // One row per timed case, with Embree's time from the same alternated rounds; ratio_to_embree
     // is the median of the per-round ratios t / t(Embree) with its 95% bootstrap interval.
     auto row = [&](const std::string& exp, const Case& c, const std::string& accel, double d, const Measured& m,
@@ -259,7 +270,7 @@ int main(int argc, char** argv) {
       const IntervalEstimate ratio = time_ratio(m, embree);
       csv.row(exp, c.label, c.spec, c.scene->primitive_count(), accel, d, c.rays.size(), m.ns, embree.ns, ratio.value,
               m.tests, m.cells, m.skips, m.build_s, m.bytes, m.nodes, m.hit_rate, m.ns_ci.lo, m.ns_ci.hi,
-              m.ns_ci.replicates, ratio.lo, ratio.hi);
+              m.ns_ci.replicates, ratio.lo, ratio.hi, m.build_ci.lo, m.build_ci.hi, m.build_ci.replicates);
     };
     const auto ns_text = [](const Measured& m) { return format_interval(m.ns_ci); };
     for (auto& c : cases) {
@@ -417,11 +428,11 @@ int main(int argc, char** argv) {
           "The tables of this and the next two sections time their cases and Embree in {} alternated rounds per "
           "scene (each round traces every case in turn, the fastest pass over {:.2g} s of the tracing thread's CPU "
           "time); ns/ray is the median over the rounds, every time ratio is taken per round, and 95% bootstrap "
-          "intervals are in brackets. *build s* is one build's time (not replicated; the goals section below "
-          "replicates the builds it judges).\n\n",
-          kRounds, min_s / kRounds);
+          "intervals are in brackets. *build s* is the median wall-clock build time over {} alternated rounds of "
+          "builds (each round builds every case in turn), with its 95% bootstrap interval.\n\n",
+          kRounds, min_s / kRounds, kBuildRounds);
       md += "### Placement: bounding box, clipped and exact\n\n| scene | place | tests/ray | ns/ray [95%] | time vs "
-            "bbox [95%] | build s (1 build) | MiB | refs/cell memory vs bbox | rounds |\n"
+            "bbox [95%] | build s [95%] | MiB | refs/cell memory vs bbox | rounds |\n"
             "|---|---|---|---|---|---|---|---|---|\n";
       const std::vector<std::string> places = {"bbox", "clipped", "exact"};
       for (const auto& c : cases) {
@@ -433,8 +444,8 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < places.size(); ++i) {
           const Measured& m = ms[i];
           row("placement", c, specs[i], 3.0, m, ms.back());
-          md += fmt::format("| {} | {} | {:.1f} | {} | {} | {:.3f} | {:.1f} | {:.2f} | {} |\n", c.label, places[i], m.tests,
-                            ns_text(m), format_interval(time_ratio(m, bbox)), m.build_s, m.bytes / 1048576.0,
+          md += fmt::format("| {} | {} | {:.1f} | {} | {} | {} | {:.1f} | {:.2f} | {} |\n", c.label, places[i], m.tests,
+                            ns_text(m), format_interval(time_ratio(m, bbox)), format_interval(m.build_ci), m.bytes / 1048576.0,
                             double(m.bytes) / double(bbox.bytes), m.ns_ci.replicates);
         }
       }
@@ -459,19 +470,19 @@ int main(int argc, char** argv) {
       // (4) where grids work and where they fail
       const std::vector<std::string> accels = {"grid", "nested-grid", "nested-grid:mode=two-level"};
       md += "### Where grids work and where they fail\n\n| scene | accelerator | ns/ray [95%] | time / Embree's [95%] | "
-            "tests/ray | cells/ray | build s (1 build) | MiB | rounds |\n|---|---|---|---|---|---|---|---|---|\n";
+            "tests/ray | cells/ray | build s [95%] | MiB | rounds |\n|---|---|---|---|---|---|---|---|---|\n";
       for (const auto& c : cases) {
         progress("grids: compare " + c.label + ", the grids and Embree in alternated rounds");
         const std::vector<Measured> ms = measure_against_embree(accels, c.scene, c.rays, min_s);
         const Measured& embree = ms.back();
         row("embree", c, "embree", 0.0, embree, embree);
-        md += fmt::format("| {} | embree | {} | 1 | – | – | {:.3f} | – | {} |\n", c.label, ns_text(embree), embree.build_s,
+        md += fmt::format("| {} | embree | {} | 1 | – | – | {} | – | {} |\n", c.label, ns_text(embree), format_interval(embree.build_ci),
                           embree.ns_ci.replicates);
         for (std::size_t i = 0; i < accels.size(); ++i) {
           const Measured& m = ms[i];
           row("compare", c, accels[i], 3.0, m, embree);
-          md += fmt::format("| {} | {} | {} | {} | {:.1f} | {:.1f} | {:.3f} | {:.1f} | {} |\n", c.label, accels[i],
-                            ns_text(m), format_interval(time_ratio(m, embree)), m.tests, m.cells, m.build_s,
+          md += fmt::format("| {} | {} | {} | {} | {:.1f} | {:.1f} | {} | {:.1f} | {} |\n", c.label, accels[i],
+                            ns_text(m), format_interval(time_ratio(m, embree)), m.tests, m.cells, format_interval(m.build_ci),
                             m.bytes / 1048576.0, m.ns_ci.replicates);
         }
       }
@@ -668,6 +679,7 @@ int main(int argc, char** argv) {
           Measured m;
           std::unique_ptr<Aggregate> accel;
           m.build_s = seconds_of([&] { accel = make_accelerator(a, c->scene); });
+          m.build_ci.value = m.build_s, m.build_ci.replicates = 1;  // one build: the table below times builds
           const TraceResult counted = trace_rays(*accel, c->rays, TraceOptions{1, true, false});
           const double n = static_cast<double>(c->rays.size());
           m.tests = static_cast<double>(counted.counters.prim_tests) / n;
@@ -775,19 +787,19 @@ int main(int argc, char** argv) {
                 kRounds);
             const IntervalEstimate build = bootstrap_median(t[0]);
             m.build_s = build.value;
-            const double floor_s = median(t[1]), floor_4k_s = median(t[2]), count_scatter_s = median(t[3]);
             const IntervalEstimate find_cells_s = bootstrap_median(t[4]);
-            csv.row("goal_build", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                    m.build_s, m.bytes, m.nodes, 0.0, build.lo, build.hi, kRounds);
-            csv.row("goal_build_floor", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                    0.0, floor_s, refs * sizeof(std::uint32_t), 0, 0.0, 0.0, 0.0, kRounds);
-            csv.row("goal_build_floor_4k", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0,
-                    0.0, 0.0, floor_4k_s, refs * sizeof(std::uint32_t), 0, 0.0, 0.0, 0.0, kRounds);
-            csv.row("goal_build_find_cells", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0,
-                    0.0, 0.0, find_cells_s.value, refs * sizeof(std::uint32_t), 0, 0.0, find_cells_s.lo,
-                    find_cells_s.hi, kRounds);
-            csv.row("goal_build_count_scatter", c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0,
-                    0.0, 0.0, 0.0, count_scatter_s, refs * sizeof(std::uint32_t), 0, 0.0, 0.0, 0.0, kRounds);
+            // Build rows: no trace (ray, ns and ratio columns 0); build_s with build_s_lo/hi over the rounds.
+            const auto build_row = [&](const char* exp, const IntervalEstimate& seconds, std::size_t bytes,
+                                       std::size_t nodes) {
+              csv.row(exp, c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                      seconds.value, bytes, nodes, 0.0, 0.0, 0.0, 0, 0.0, 0.0, seconds.lo, seconds.hi, kRounds);
+            };
+            const std::size_t ref_bytes = static_cast<std::size_t>(refs) * sizeof(std::uint32_t);
+            build_row("goal_build", build, m.bytes, m.nodes);
+            build_row("goal_build_floor", bootstrap_median(t[1]), ref_bytes, 0);
+            build_row("goal_build_floor_4k", bootstrap_median(t[2]), ref_bytes, 0);
+            build_row("goal_build_find_cells", find_cells_s, ref_bytes, 0);
+            build_row("goal_build_count_scatter", bootstrap_median(t[3]), ref_bytes, 0);
             // The build over a floor, round by round. Below a millisecond the floor reuses the heap's
             // pages and the ratio says nothing.
             const auto ratio = [&](std::size_t k) { return bootstrap_median(per_round_ratios(t[0], t[k])); };
@@ -823,8 +835,8 @@ int main(int argc, char** argv) {
         const IntervalEstimate uniform_s = bootstrap_median(t[0]), nested_s = bootstrap_median(t[1]),
                                ratio = bootstrap_median(per_round_ratios(t[1], t[0]));
         csv.row("goal_nested_build", big.label, big.spec, big.scene->primitive_count(), "nested-grid", 3.0, 0, 0.0, 0.0,
-                0.0, 0.0, 0.0, 0.0, nested_s.value, nested_stats.bytes, nested_stats.nodes, 0.0, nested_s.lo,
-                nested_s.hi, kRounds);
+                0.0, 0.0, 0.0, 0.0, nested_s.value, nested_stats.bytes, nested_stats.nodes, 0.0, 0.0, 0.0, 0, 0.0,
+                0.0, nested_s.lo, nested_s.hi, kRounds);
         md += fmt::format("\nNested grid build on {} (default parameters): {} s against the uniform grid's {} s "
                           "(`grid`, default), {}× (goal ≤ 2×; medians [95% bootstrap intervals] over {} alternated "
                           "rounds, the ratio taken per round, thread CPU time).\n\n",
