@@ -320,17 +320,18 @@ class CostModelExperiment {
   /// N × round r's ns per ray of what was built (auto: of its round-r choice).
   void time_auto_totals(const std::string& s, const std::shared_ptr<const Scene>& sc, const std::string& kind,
                         const std::vector<Ray>& rays) {
+    std::vector<const RunRecord*> candidates;
+    for (const RunRecord& r : heldout_)
+      if (r.scene == s && r.ray_kind == kind && !is_textbook(r.accel)) candidates.push_back(&r);
+    if (candidates.empty()) return;  // no candidate measured on this scene and ray kind
     const std::size_t first = auto_totals_.size();
     for (const double count : kAutoRayCounts) {
       AutoTotal t;
       t.scene = s, t.kind = kind, t.count = count;
       double best_total = INFINITY;
-      for (const RunRecord& r : heldout_) {
-        if (r.scene != s || r.ray_kind != kind || is_textbook(r.accel)) continue;
-        const double total_s = r.build_s + count * r.ns_per_ray_min * 1e-9;
-        if (total_s < best_total) best_total = total_s, t.best = r.accel;
-      }
-      if (t.best.empty()) return;  // no candidate measured on this scene and ray kind
+      for (const RunRecord* r : candidates)
+        if (const double total_s = r->build_s + count * r->ns_per_ray_min * 1e-9; total_s < best_total)
+          best_total = total_s, t.best = r->accel;
       auto_totals_.push_back(std::move(t));
     }
     progress("exp_cost_model: auto:count=N on " + s + " " + kind + ", " + std::to_string(kAutoRounds) + " rounds");

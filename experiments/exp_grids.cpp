@@ -40,9 +40,9 @@ constexpr int kRounds = 5;
 /// of the other timings: t(3)/t(d*) compares points of a flat curve near its minimum, so it takes
 /// more replicates than a ratio to Embree does.
 constexpr int kResolutionRounds = 15;
+constexpr double kResolutionTimeFactor = 3.0;
 /// Alternated rounds of the builds measure_alternated times (each round builds every spec in turn).
 constexpr int kBuildRounds = 5;
-constexpr double kResolutionTimeFactor = 3.0;
 
 /// Seconds (the thread's CPU time) to allocate `count` 32-bit values and write them once in
 /// order, one measurement (the goal table takes them in alternated rounds): the least time any build that stores `count` cell references can take on
