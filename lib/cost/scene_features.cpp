@@ -26,22 +26,24 @@ SceneFeatures scene_features(const Scene& scene) {
   f.triangles = static_cast<double>(scene.triangle_count());
   const TriangleMesh& mesh = scene.mesh;
   const std::size_t n = mesh.size();
+  // One pass over the areas: their sum, the largest, and every stride-th one for the median.
+  const std::size_t stride = std::max<std::size_t>(1, n / kMedianSample);
+  std::vector<double> sample;
+  sample.reserve(n / stride + 1);
   AreaPass pass;
-  for (std::size_t t = 0; t < n; ++t) {
+  for (std::size_t t = 0, next = 0; t < n; ++t) {
     const double area = triangle_area(mesh, t);
     pass.total += area;
     pass.largest = std::max(pass.largest, area);
+    if (t == next) {
+      if (area > 0) sample.push_back(area);
+      next += stride;
+    }
   }
   for (const Vec3f& v : mesh.vertices) pass.box.extend(v);  // TriangleMesh::bounds: holds every triangle
   f.total_area = pass.total;
   f.max_area = pass.largest;
   Bounds3f box = pass.box;
-  // The median over every stride-th triangle.
-  const std::size_t stride = std::max<std::size_t>(1, n / kMedianSample);
-  std::vector<double> sample;
-  sample.reserve(n / stride + 1);
-  for (std::size_t t = 0; t < n; t += stride)
-    if (const double area = triangle_area(mesh, t); area > 0) sample.push_back(area);
   if (!sample.empty()) {
     const auto mid = sample.begin() + static_cast<std::ptrdiff_t>(sample.size() / 2);
     std::nth_element(sample.begin(), mid, sample.end());
