@@ -340,10 +340,10 @@ class CostModelExperiment {
       AutoTotal& t = auto_totals_[i];
       const std::string spec = fmt::format("auto:model={},rays={},count={:.0f}", model_path_, kind, t.count);
       builds.push_back([&t, &sc, spec] {
-        TimingArena arena(1);
-        const auto start = std::chrono::steady_clock::now();
-        const auto a = arena.execute([&] { return make_accelerator(spec, sc, model_build_context()); });
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        TimingArena arena(1);  // as build_structure, whose tree features an AutoAccelerator does not have
+        std::unique_ptr<Aggregate> a;
+        const double seconds =
+            seconds_of([&] { arena.execute([&] { a = make_accelerator(spec, sc, model_build_context()); }); });
         const AutoChoice& choice = dynamic_cast<const AutoAccelerator&>(*a).choice();
         if (t.chosen.empty()) t.choice = choice;
         t.chosen.push_back(choice.chosen);

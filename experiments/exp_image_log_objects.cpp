@@ -94,7 +94,7 @@ std::vector<Family> families(bool full) {
 struct Run {
   double n = 0;
   TraceCost cost;
-  double embree_ns = 0, build_s = 0;
+  double build_s = 0;
   std::size_t bytes = 0;
   std::vector<double> ns_rounds;  ///< ns/ray per replicate round; cost.ns is their median
 };
@@ -175,7 +175,6 @@ int main(int argc, char** argv) {
         for (const auto& a : fam.accels) {
           auto& v = runs[fam.name][a];
           if (v.empty() || v.back().n != n) continue;
-          v.back().embree_ns = embree_ns;
           const Run& r = v.back();
           csv.row(fam.name, spec, n, a, rays.size(), r.cost.nodes, r.cost.leaves, r.cost.tests, r.cost.ops(), r.cost.ns,
                   embree_ns, r.build_s, r.bytes, r.cost.hit_rate);
