@@ -543,12 +543,10 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
   const KeyNumber recovers = replicated_key(
       "b(`bvh`) − b(`bvh:builder=spatial`) (ns per unit of box growth)", recovery,
       canonical_spec("bvh") + " and " + canonical_spec("bvh:builder=spatial") + " on " + walls_spec, how);
-  const std::string slows_v = decide_verdict(slows, Threshold{"b/a of `bvh` above 0", "above", 0.0});
-  const std::string recovers_v = decide_verdict(recovers, Threshold{"b(bvh) − b(SBVH) above 0", "above", 0.0});
-  const std::string verdict = slows_v == kInconclusive || recovers_v == kInconclusive ? kInconclusive
-                              : slows_v == kRefuted                                   ? kRefuted
-                              : recovers_v == kConfirmed                              ? kConfirmed
-                                                                                      : kConditional;
+  const Threshold slows_rule{"b/a of `bvh` above 0", "above", 0.0};
+  const Threshold recovers_rule{"b(bvh) − b(SBVH) above 0", "above", 0.0};
+  const std::string recovers_v = decide_verdict(recovers, recovers_rule);
+  const std::string verdict = decide_gated({decide_verdict(slows, slows_rule), recovers_v});
   md += fmt::format("\nFitted round by round (medians over the rounds): `bvh` b/a = {}, `bvh:builder=spatial` b/a = {}, b(`bvh`) − "
                     "b(`bvh:builder=spatial`) = {} ns.\n",
                     format_interval(bvh_ba), format_interval(sbvh_ba), format_interval(recovery));
@@ -563,6 +561,8 @@ std::string rotated_walls(Runner& run, const Options& opt, std::vector<Verdict>&
                                 "stated conditions",
                                 "above", 0.0},
                       "build/experiments/exp_bvh --mode " + opt.mode + " --claim 7a"});
+  verdicts.back().parts = {{slows, slows_rule}, {recovers, recovers_rule}};
+  verdicts.back().parts_rule = "gated";
   reasons.push_back(fmt::format(
       "Object boxes of rotated walls are mostly empty and overlap; b is the time a structure pays per unit of box "
       "growth. `bvh` pays b/a = {}; spatial splits cut the walls and pay {} (b/a = {}; the difference of b is {} ns); "

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <iostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "accel/common/timing_cpu.h"
@@ -166,6 +167,18 @@ inline std::string decide_conditional(const std::vector<std::string>& cases) {
   return any_confirmed ? kConfirmed : any_refuted ? kRefuted : kInconclusive;
 }
 
+/// The verdict of a claim with a precondition: `cases[0]` must hold (refuted if it fails), and the
+/// other cases decide between confirmed (all hold) and holds only under stated conditions; inconclusive at
+/// this noise if any case is.
+inline std::string decide_gated(const std::vector<std::string>& cases) {
+  for (const auto& c : cases)
+    if (c == kInconclusive) return kInconclusive;
+  if (cases.empty() || cases[0] == kRefuted) return cases.empty() ? kInconclusive : kRefuted;
+  for (std::size_t i = 1; i < cases.size(); ++i)
+    if (cases[i] != kConfirmed) return kConditional;
+  return kConfirmed;
+}
+
 /// The verdict of a claim that must hold in every case: confirmed if every case is, refuted if any
 /// case is, inconclusive at this noise otherwise.
 inline std::string decide_all(const std::vector<std::string>& cases) {
@@ -204,7 +217,23 @@ struct Verdict {
   KeyNumber number = {};       ///< the key number the verdict is decided from
   Threshold threshold = {};    ///< the rule, stated before the measurement
   std::string command = {};    ///< the command that reproduces this claim alone
+  /// A verdict combined from several decided parts (claim 6a: one per scene), each a key number
+  /// under its own threshold; parts[0] is `number`. `parts_rule` names the combination:
+  /// "conditional" (decide_conditional) or "gated" (decide_gated). Written to
+  /// <section>.verdict_parts.csv, so that a claim replicated in separate processes is decided again
+  /// part by part (experiments/process_replicates.py). Empty: `number` alone decides.
+  std::vector<std::pair<KeyNumber, Threshold>> parts = {};
+  std::string parts_rule = {};
 };
+
+/// decide_verdict of every part of `v`, combined by its parts_rule.
+inline std::string decide_parts(const Verdict& v) {
+  std::vector<std::string> cases;
+  for (const auto& [key, threshold] : v.parts) cases.push_back(decide_verdict(key, threshold));
+  if (v.parts_rule == "conditional") return decide_conditional(cases);
+  if (v.parts_rule == "gated") return decide_gated(cases);
+  throw std::logic_error("decide_parts: rule '" + v.parts_rule + "'");
+}
 
 /// The line that opens a section with an anchor the summary table links to.
 inline std::string section_anchor(const std::string& id) { return "<a id=\"" + id + "\"></a>\n\n"; }
@@ -286,8 +315,14 @@ class CsvWriter {
 
 /// Writes `verdicts` to OUT/<section>.verdicts.csv (replacing an earlier run's).
 /// The first five columns are the summary table's; the rest are the structured key number and
-/// threshold that results.json carries (make_report.py).
+/// threshold that results.json carries (make_report.py). The parts of verdicts that have them go to
+/// OUT/<section>.verdict_parts.csv, one row per part (none: no such file). Throws std::logic_error,
+/// before writing anything, where a verdict's parts do not decide its verdict.
 inline void write_verdicts(const std::string& out_dir, const std::string& section, const std::vector<Verdict>& verdicts) {
+  for (const auto& v : verdicts)
+    if (!v.parts.empty() && (v.parts.front().first.name != v.number.name || decide_parts(v) != v.verdict))
+      throw std::logic_error("write_verdicts: claim " + v.claim + ": parts[0] is not the key number, or the parts "
+                             "decide another verdict than the row's");
   CsvWriter csv(out_dir + "/" + section + ".verdicts.csv",
                 {"claim", "title", "verdict", "key", "anchor", "key_name", "key_value", "ci95_lo", "ci95_hi",
                  "replicates", "spec", "interval", "threshold", "threshold_direction", "threshold_value",
@@ -296,6 +331,17 @@ inline void write_verdicts(const std::string& out_dir, const std::string& sectio
     csv.row(v.claim, v.title, v.verdict, v.key, v.anchor, v.number.name, v.number.value, v.number.lo, v.number.hi,
             v.number.replicates, v.number.spec, v.number.interval, v.threshold.text, v.threshold.direction,
             v.threshold.value, v.threshold.tolerance, v.command);
+  const std::string parts_path = out_dir + "/" + section + ".verdict_parts.csv";
+  std::filesystem::remove(parts_path);
+  if (std::none_of(verdicts.begin(), verdicts.end(), [](const Verdict& v) { return !v.parts.empty(); })) return;
+  CsvWriter parts(parts_path, {"claim", "rule", "part", "name", "key_value", "ci95_lo", "ci95_hi", "replicates",
+                               "threshold_direction", "threshold_value", "threshold_tolerance"});
+  for (const auto& v : verdicts)
+    for (std::size_t i = 0; i < v.parts.size(); ++i) {
+      const auto& [key, threshold] = v.parts[i];
+      parts.row(v.claim, v.parts_rule, i, key.name, key.value, key.lo, key.hi, key.replicates, threshold.direction,
+                threshold.value, threshold.tolerance);
+    }
 }
 
 /// Fitted curves for the plots: each experiment writes its fits to <name>_fits.csv, one row per

@@ -480,7 +480,8 @@ def main() -> int:
         for i, v in enumerate(verdicts):
             replicates = process_replicates.replicate_rows(out, v["claim"])
             if replicates:
-                verdicts[i], md = process_replicates.combine(v, replicates)
+                first = dict(v, parts=process_replicates.read_parts(out, v["claim"]))
+                verdicts[i], md = process_replicates.combine(first, replicates)
                 if v["section"] not in texts:
                     names.append(v["section"])
                 texts[v["section"]] = process_replicates.insert_after_verdict(texts.get(v["section"], ""), v["claim"], md)

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """A claim's key number replicated in separate processes.
 
-Some key numbers are timed slopes (claim 4's sort/events slope, claim 7c's traversal-share slope):
+Some key numbers are timed (claim 4's sort/events slope, 6a's t(3)/t(d*), 7a's slowdown slope b/a,
+7c's traversal-share slope):
 within one process their replicate rounds agree closely, yet a rerun in another process, at
 another point of the report, moves them far outside that interval (allocation, page placement and
 the machine's load differ between processes, and every round of one process shares them). For
@@ -17,7 +18,14 @@ experiments/experiment_common.h; directions below, above, within). Where a proce
 own threshold (claim 4's k/2), the most demanding one decides: the largest for `above`, the
 smallest for `below`.
 
-Every replicate must be the same claim with the same spec and rule as the first process's row;
+A claim whose verdict combines several decided parts (claim 6a: t(3)/t(d*) on each scene; 7a: the
+slowdown and the recovery) lists them in <section>.verdict_parts.csv beside its verdict row
+(write_verdicts in experiments/experiment_common.h), the first part being the key number. Then every
+part is combined over the processes as above and decided by its own threshold, and the verdict is
+the claim's rule applied to the parts' verdicts: "conditional" (decide_conditional) or "gated"
+(decide_gated), as the experiment itself decides it.
+
+Every replicate must be the same claim with the same spec, rule and parts as the first process's row;
 anything else (a stale directory, a foreign file) raises ReplicateError."""
 import csv
 import math
@@ -28,6 +36,7 @@ import statistics
 T975 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262, 10: 2.228}
 
 CONFIRMED, REFUTED, INCONCLUSIVE = "confirmed", "refuted", "inconclusive at this noise"
+CONDITIONAL = "holds only under stated conditions"
 
 
 class ReplicateError(Exception):
@@ -44,9 +53,22 @@ def number(row, field, where) -> float:
     return x
 
 
+def read_parts(directory: pathlib.Path, claim: str) -> list:
+    """The claim's rows of directory/*.verdict_parts.csv in part order; [] when it has none."""
+    parts = []
+    for path in sorted(directory.glob("*.verdict_parts.csv")):
+        with path.open(newline="") as f:
+            parts += [dict(r, path=str(path)) for r in csv.DictReader(f) if r.get("claim") == claim]
+    try:
+        parts.sort(key=lambda r: int(r.get("part", "")))
+    except ValueError:
+        raise ReplicateError(f"{directory}: claim {claim}: a verdict part is not numbered") from None
+    return parts
+
+
 def replicate_rows(out: pathlib.Path, claim: str) -> list:
     """The claim's verdict rows from out/process_replicates/claim-ID/run-*/*.verdicts.csv, in run
-    order; [] when the claim was not replicated."""
+    order, each with its verdict parts under "parts"; [] when the claim was not replicated."""
     rows = []
     base = out / "process_replicates" / f"claim-{claim}"
     for run in sorted(base.glob("run-*"), key=lambda p: (len(p.name), p.name)):
@@ -56,7 +78,7 @@ def replicate_rows(out: pathlib.Path, claim: str) -> list:
                 found += [dict(r, path=str(path)) for r in csv.DictReader(f) if r.get("claim") == claim]
         if len(found) != 1:
             raise ReplicateError(f"{run}: expected one verdict row of claim {claim}, found {len(found)}")
-        rows.append(found[0])
+        rows.append(dict(found[0], parts=read_parts(run, claim)))
     return rows
 
 
@@ -75,8 +97,80 @@ def decide(lo: float, hi: float, direction: str, value: float, tolerance: float)
     raise ReplicateError(f"threshold direction {direction!r} cannot be decided from one key number")
 
 
+def decide_conditional(cases: list) -> str:
+    """decide_conditional of experiment_common.h."""
+    if INCONCLUSIVE in cases:
+        return INCONCLUSIVE
+    if CONFIRMED in cases and REFUTED in cases:
+        return CONDITIONAL
+    return CONFIRMED if CONFIRMED in cases else REFUTED if REFUTED in cases else INCONCLUSIVE
+
+
+def decide_gated(cases: list) -> str:
+    """decide_gated of experiment_common.h: cases[0] must hold, the others decide between confirmed
+    and holds only under stated conditions."""
+    if not cases or INCONCLUSIVE in cases:
+        return INCONCLUSIVE
+    if cases[0] == REFUTED:
+        return REFUTED
+    return CONFIRMED if all(c == CONFIRMED for c in cases[1:]) else CONDITIONAL
+
+
+RULES = {"conditional": decide_conditional, "gated": decide_gated}
+
+
 def fmt(x: float) -> str:
     return f"{x:.4g}"
+
+
+def over_processes(claim: str, rows: list, direction: str, tolerance: float):
+    """(mean, lo, hi, threshold, verdict) of the rows' key_value over the processes: the t-interval,
+    the most demanding of their threshold_value, and the verdict that interval gives."""
+    values = [number(r, "key_value", r.get("path", "first process")) for r in rows]
+    thresholds = [number(r, "threshold_value", r.get("path", "first process")) for r in rows]
+    n = len(values)
+    if n < 2:
+        raise ReplicateError(f"claim {claim}: at least two processes are needed, got {n}")
+    if n - 1 not in T975:
+        raise ReplicateError(f"claim {claim}: {n} processes; at most {max(T975) + 1} are supported")
+    mean, sd = statistics.fmean(values), statistics.stdev(values)
+    half = T975[n - 1] * sd / math.sqrt(n)
+    threshold = max(thresholds) if direction == "above" else min(thresholds) if direction == "below" else thresholds[0]
+    if direction == "within" and any(t != thresholds[0] for t in thresholds):
+        raise ReplicateError(f"claim {claim}: the processes' targets differ: {thresholds}")
+    return mean, mean - half, mean + half, threshold, decide(mean - half, mean + half, direction, threshold, tolerance)
+
+
+def combine_parts(claim: str, rows: list):
+    """The verdict of a claim with verdict parts over the processes `rows` (each with its "parts"),
+    and the Markdown table of its parts."""
+    first = rows[0]["parts"]
+    for r in rows:
+        parts, where = r.get("parts") or [], r.get("path", "first process")
+        if len(parts) != len(first):
+            raise ReplicateError(f"{where}: claim {claim} has {len(parts)} verdict parts, the first process {len(first)}")
+        for a, b in zip(parts, first):
+            for field in ("rule", "name", "threshold_direction", "threshold_tolerance"):
+                if a.get(field, "") != b.get(field, ""):
+                    raise ReplicateError(f"{a.get('path', where)}: verdict part {field} {a.get(field)!r} differs from "
+                                         f"the first process's {b.get(field)!r}")
+    rule = first[0].get("rule", "")
+    if rule not in RULES:
+        raise ReplicateError(f"{first[0].get('path', 'first process')}: claim {claim}: unknown verdict rule {rule!r}")
+    if first[0].get("name") != rows[0].get("key_name"):
+        raise ReplicateError(f"{first[0].get('path', 'first process')}: claim {claim}: the first verdict part "
+                             f"{first[0].get('name')!r} is not the key number {rows[0].get('key_name')!r}")
+    verdicts = []
+    md = ["| part | processes | over the processes [95%] | threshold | verdict |", "|---|---|---|---|---|"]
+    for j, part in enumerate(first):
+        direction = part.get("threshold_direction", "")
+        tolerance = number(part, "threshold_tolerance", part.get("path", "")) if direction == "within" else math.nan
+        column = [r["parts"][j] for r in rows]
+        mean, lo, hi, threshold, verdict = over_processes(claim, column, direction, tolerance)
+        verdicts.append(verdict)
+        md.append(f"| {part['name']} | {', '.join(fmt(number(c, 'key_value', '')) for c in column)} | "
+                  f"{fmt(mean)} [{fmt(lo)}, {fmt(hi)}] | {direction} {fmt(threshold)} | {verdict} |")
+    return RULES[rule](verdicts), md
 
 
 def combine(first: dict, replicates: list):
@@ -95,19 +189,14 @@ def combine(first: dict, replicates: list):
     values = [number(r, "key_value", r.get("path", "first process")) for r in rows]
     thresholds = [number(r, "threshold_value", r.get("path", "first process")) for r in rows]
     n = len(values)
-    if n < 2:
-        raise ReplicateError(f"claim {claim}: at least two processes are needed, got {n}")
-    if n - 1 not in T975:
-        raise ReplicateError(f"claim {claim}: {n} processes; at most {max(T975) + 1} are supported")
-    mean, sd = statistics.fmean(values), statistics.stdev(values)
-    half = T975[n - 1] * sd / math.sqrt(n)
-    lo, hi = mean - half, mean + half
-    threshold = max(thresholds) if direction == "above" else min(thresholds) if direction == "below" else thresholds[0]
-    if direction == "within" and any(t != thresholds[0] for t in thresholds):
-        raise ReplicateError(f"claim {claim}: the processes' targets differ: {thresholds}")
     tolerance = number(first, "threshold_tolerance", "first process") if direction == "within" else math.nan
-    verdict = decide(lo, hi, direction, threshold, tolerance)
-    row = dict(first)
+    mean, lo, hi, threshold, verdict = over_processes(claim, rows, direction, tolerance)
+    parts_md = []
+    if first.get("parts") or any(r.get("parts") for r in replicates):
+        if not first.get("parts"):
+            raise ReplicateError(f"claim {claim}: a replicate has verdict parts, the first process none")
+        verdict, parts_md = combine_parts(claim, rows)
+    row = {k: v for k, v in first.items() if k != "parts"}
     row.update(key_value=repr(mean), ci95_lo=repr(lo), ci95_hi=repr(hi), replicates=str(n),
                threshold_value=repr(threshold), verdict=verdict,
                interval=f"95% t-interval over {n} separate processes: mean ± t(0.975, {n - 1})·s/√{n}, s the standard "
@@ -129,8 +218,15 @@ def combine(first: dict, replicates: list):
         except ValueError:
             own_cell = "–"
         md.append(f"| {i + 1} | {fmt(values[i])} | {own_cell} | {fmt(thresholds[i])} |")
-    md += ["", f"Over the {n} processes: **{fmt(mean)} [{fmt(lo)}, {fmt(hi)}]** against {direction} {fmt(threshold)}: "
-           f"**{verdict}** (first process alone: {first['verdict']}).", ""]
+    if parts_md:
+        md += ["", f"The verdict combines the claim's parts, each over the {n} processes and decided by its own "
+               f"threshold, by the rule \"{rows[0]['parts'][0]['rule']}\" (experiments/process_replicates.py):", ""]
+        md += parts_md
+        md += ["", f"Key number over the {n} processes: **{fmt(mean)} [{fmt(lo)}, {fmt(hi)}]**; claim verdict: "
+               f"**{verdict}** (first process alone: {first['verdict']}).", ""]
+    else:
+        md += ["", f"Over the {n} processes: **{fmt(mean)} [{fmt(lo)}, {fmt(hi)}]** against {direction} "
+               f"{fmt(threshold)}: **{verdict}** (first process alone: {first['verdict']}).", ""]
     return row, "\n".join(md)
 
 

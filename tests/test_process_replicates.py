@@ -95,6 +95,72 @@ class Combine(unittest.TestCase):
                                        [row(0.5, 0.4, 0.6, direction="conditional")])
 
 
+PART_FIELDS = ["claim", "rule", "part", "name", "key_value", "ci95_lo", "ci95_hi", "replicates", "threshold_direction",
+               "threshold_value", "threshold_tolerance"]
+
+
+def parts(values, rule="conditional", names=("b", "sphereflake", "stadium"), threshold=1.1, direction="below"):
+    """Verdict parts of claim 4's test row: one per value, the first named as the key number."""
+    return [{"claim": "4", "rule": rule, "part": str(j), "name": names[j], "key_value": str(v),
+             "ci95_lo": str(v - 0.001), "ci95_hi": str(v + 0.001), "replicates": "15", "threshold_direction": direction,
+             "threshold_value": str(threshold), "threshold_tolerance": "nan"} for j, v in enumerate(values)]
+
+
+def with_parts(value, part_values, **kw):
+    return dict(row(value, value - 0.001, value + 0.001, threshold=1.1, direction="below"), parts=parts(part_values, **kw))
+
+
+class CombineParts(unittest.TestCase):
+    """A claim decided from several parts (6a: one per scene; 7a: a precondition and a recovery) is
+    decided again part by part over the processes, by the claim's own rule."""
+
+    def test_conditional_rule_over_every_part(self):
+        # The key part holds in every process; the second part crosses 1.1 in one process only, and its
+        # interval over the processes straddles the threshold: the claim is undecided, although the
+        # key number alone would confirm it.
+        rows = [with_parts(1.00, [1.00, 1.05, 1.2]), with_parts(1.01, [1.01, 1.12, 1.2]),
+                with_parts(1.00, [1.00, 1.06, 1.2])]
+        combined, md = process_replicates.combine(rows[0], rows[1:])
+        self.assertEqual(combined["verdict"], "inconclusive at this noise")
+        self.assertNotIn("parts", combined)
+        self.assertIn("| sphereflake | 1.05, 1.12, 1.06 |", md)
+        # Every part decided, holding on two scenes and failing on the third: holds only under conditions.
+        rows = [with_parts(1.00, [1.00, 1.05, 1.2]), with_parts(1.01, [1.01, 1.04, 1.21]),
+                with_parts(1.00, [1.00, 1.06, 1.19])]
+        self.assertEqual(process_replicates.combine(rows[0], rows[1:])[0]["verdict"], "holds only under stated conditions")
+
+    def test_gated_rule(self):
+        def gated(first_values, second_values):
+            rows = [with_parts(a, [a, b], rule="gated", names=("b", "recovery"), threshold=0.0, direction="above")
+                    for a, b in zip(first_values, second_values)]
+            for r in rows:
+                r.update(threshold_value="0.0", threshold_direction="above")
+            return process_replicates.combine(rows[0], rows[1:])[0]["verdict"]
+
+        self.assertEqual(gated([0.06, 0.061, 0.059], [0.9, 1.0, 0.8]), "confirmed")
+        self.assertEqual(gated([0.06, 0.061, 0.059], [-0.9, -1.0, -0.8]), "holds only under stated conditions")
+        self.assertEqual(gated([-0.06, -0.061, -0.059], [0.9, 1.0, 0.8]), "refuted")
+        self.assertEqual(gated([0.06, 0.061, 0.059], [0.9, -1.0, 0.8]), "inconclusive at this noise")
+
+    def test_refuses_parts_that_differ_between_processes(self):
+        rows = [with_parts(1.0, [1.0, 1.05]), with_parts(1.0, [1.0, 1.05, 1.2])]
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "verdict parts"):
+            process_replicates.combine(rows[0], rows[1:])
+        rows = [with_parts(1.0, [1.0, 1.05]), with_parts(1.0, [1.0, 1.05], rule="gated")]
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "rule"):
+            process_replicates.combine(rows[0], rows[1:])
+        rows = [with_parts(1.0, [1.0, 1.05], rule="majority"), with_parts(1.0, [1.0, 1.05], rule="majority")]
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "unknown verdict rule"):
+            process_replicates.combine(rows[0], rows[1:])
+        rows = [with_parts(1.0, [1.0, 1.05], names=("grass", "stadium")),
+                with_parts(1.0, [1.0, 1.05], names=("grass", "stadium"))]
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "is not the key number"):
+            process_replicates.combine(rows[0], rows[1:])
+        rows = [row(1.0, 0.99, 1.01, threshold=1.1, direction="below"), with_parts(1.0, [1.0, 1.05])]
+        with self.assertRaisesRegex(process_replicates.ReplicateError, "the first process none"):
+            process_replicates.combine(rows[0], rows[1:])
+
+
 class MakeReport(unittest.TestCase):
     def setUp(self):
         self.dir = tempfile.TemporaryDirectory()
@@ -134,6 +200,32 @@ class MakeReport(unittest.TestCase):
         self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
         self.assertIn("spec", r.stderr)
         self.assertFalse((self.out / "README.md").exists())
+
+    def test_report_reads_the_verdict_parts_of_every_process(self):
+        def write_parts(path, values):
+            with path.open("w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=PART_FIELDS)
+                w.writeheader()
+                for p in parts(values, threshold=0.2, direction="above"):
+                    w.writerow(p)
+
+        write_parts(self.out / "spatial.verdict_parts.csv", [0.45, 0.1])
+        for k in (2, 3):
+            write_parts(self.out / "process_replicates" / "claim-4" / f"run-{k}" / "spatial.verdict_parts.csv",
+                        [0.5, 0.11])
+        r = self.make_report()
+        self.assertEqual(r.returncode, 0, r.stderr)
+        # b holds above 0.2 in every process, the second part fails everywhere: conditional by the rule,
+        # although the key number alone would confirm the claim.
+        claim = next(c for c in json.loads((self.out / "results.json").read_text())["claims"] if c["id"] == "4")
+        self.assertEqual(claim["verdict_text"], "holds only under stated conditions")
+        self.assertIn("| sphereflake | 0.1, 0.11, 0.11 |", (self.out / "README.md").read_text())
+        # A replicate without its parts file is one error line.
+        (self.out / "process_replicates" / "claim-4" / "run-3" / "spatial.verdict_parts.csv").unlink()
+        r = self.make_report()
+        self.assertEqual(r.returncode, 2)
+        self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+        self.assertIn("verdict parts", r.stderr)
 
     def test_a_run_without_the_claims_row_is_one_error(self):
         write_verdicts(self.out / "process_replicates" / "claim-4" / "run-2" / "spatial.verdicts.csv", [])

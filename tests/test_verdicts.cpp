@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "../experiments/experiment_common.h"
@@ -58,6 +60,45 @@ TEST(Verdicts, CombinedVerdicts) {
   EXPECT_EQ(decide_conditional({kConfirmed, kRefuted}), kConditional);
   EXPECT_EQ(decide_conditional({kConfirmed, kConfirmed}), kConfirmed);
   EXPECT_EQ(decide_conditional({kRefuted, kInconclusive}), kInconclusive);
+}
+
+TEST(Verdicts, GatedVerdictNeedsItsFirstCase) {
+  EXPECT_EQ(decide_gated({kConfirmed, kConfirmed}), kConfirmed);
+  EXPECT_EQ(decide_gated({kConfirmed, kRefuted}), kConditional);
+  EXPECT_EQ(decide_gated({kRefuted, kConfirmed}), kRefuted);
+  EXPECT_EQ(decide_gated({kRefuted, kInconclusive}), kInconclusive);
+  EXPECT_EQ(decide_gated({}), kInconclusive);
+}
+
+TEST(Verdicts, PartsAreWrittenBesideTheirVerdictAndMustDecideIt) {
+  const std::string dir = ::testing::TempDir() + "verdict_parts";
+  std::filesystem::create_directories(dir);
+  const Threshold below{"t below 1.1", "below", 1.1};
+  KeyNumber grass = interval(1.00, 1.01), sphereflake = interval(1.05, 1.06);
+  grass.name = "t(3)/t(d*) on grass";
+  sphereflake.name = "t(3)/t(d*) on sphereflake";
+  Verdict v{"6a", "grid resolution", kConfirmed, "holds", "claim-6", grass, below};
+  v.parts = {{grass, below}, {sphereflake, below}};
+  v.parts_rule = "conditional";
+  EXPECT_EQ(decide_parts(v), kConfirmed);
+  write_verdicts(dir, "grids", {v});
+  std::ifstream parts(dir + "/grids.verdict_parts.csv");
+  std::string header, first, second, none;
+  std::getline(parts, header);
+  std::getline(parts, first);
+  std::getline(parts, second);
+  EXPECT_EQ(header.rfind("claim,rule,part,name,", 0), 0u) << header;
+  EXPECT_EQ(first.rfind("6a,conditional,0,t(3)/t(d*) on grass,", 0), 0u) << first;
+  EXPECT_EQ(second.rfind("6a,conditional,1,t(3)/t(d*) on sphereflake,", 0), 0u) << second;
+  EXPECT_FALSE(std::getline(parts, none));
+  // A part failing its threshold makes the rule's verdict differ from the row's: refused.
+  v.parts[1].first = interval(1.2, 1.3);
+  EXPECT_EQ(decide_parts(v), kConditional);
+  EXPECT_THROW(write_verdicts(dir, "grids", {v}), std::logic_error);
+  // A later run without parts leaves no stale parts file.
+  v.parts.clear();
+  write_verdicts(dir, "grids", {v});
+  EXPECT_FALSE(std::filesystem::exists(dir + "/grids.verdict_parts.csv"));
 }
 
 TEST(Verdicts, FittedKeyUsesStudentsT) {
