@@ -297,10 +297,11 @@ std::string bvh_versus_kdtree(Runner& run, const Options& opt, std::vector<Verdi
         "tests), refuted when it lies below 1, inconclusive when it contains 1. The spec of both structures is "
         "printed with every default expanded.\n\n";
   md += fmt::format("*trace s* is the median over {} replicate rounds, each alternating the structure and Embree on "
-                    "the same rays, with its 95% bootstrap interval. *build s* is the median of {} builds of each structure, "
-                    "the kd-tree's and the BVH's alternating (wall clock, every hardware thread), with its 95% bootstrap "
-                    "interval. *traversal share* is an upper bound and *triangle share* a lower bound: the triangle "
-                    "share is min(1, tests × ns per test / ns per ray) with the test cost measured cache-warm.\n\n",
+                    "the same rays, with its 95% bootstrap interval. *build s* is the median of {} builds of each "
+                    "structure, the kd-tree's and the BVH's alternating (wall clock, every hardware thread), with its "
+                    "95% bootstrap interval. *traversal share* is an upper bound and *triangle share* a lower bound: "
+                    "the triangle share is min(1, tests × ns per test / ns per ray) with the test cost measured "
+                    "cache-warm.\n\n",
                     rounds_of(opt), kTableBuilds);
   md += "| scene | rays | structure | trace s [95%] | build s [95%] | traversal share (≤) | triangle share (≥) | "
         "tests/ray | total tests | hit rate | rays that hit | leaves/ray | nodes/ray | Embree trace s [95%] | rounds |\n"
@@ -335,8 +336,8 @@ std::string bvh_versus_kdtree(Runner& run, const Options& opt, std::vector<Verdi
       md += fmt::format(
           "| {} | {} | {} | {} | {} | {:.1f}% | {:.1f}% | {:.1f} | {:.3g} | {:.1f}% | {:.1f}% | {:.1f} | {:.1f} | "
           "{} | {} |\n",
-          s, rays, a, seconds(t.ns_ci), format_interval(build_ci, 2), 100 * trav, 100 * tri, t.tests, t.tests * n, 100 * t.hits_per_test,
-          100 * t.hit_rate, t.leaves, t.nodes, seconds(t.embree_ci), t.ns_ci.replicates);
+          s, rays, a, seconds(t.ns_ci), format_interval(build_ci, 2), 100 * trav, 100 * tri, t.tests, t.tests * n,
+          100 * t.hits_per_test, 100 * t.hit_rate, t.leaves, t.nodes, seconds(t.embree_ci), t.ns_ci.replicates);
       scene_tests[a] = t.tests;
       traversal_share[a].push_back(trav);
       leaves[a].push_back(t.leaves);

@@ -417,8 +417,8 @@ int main(int argc, char** argv) {
       verdicts.back().parts_rule = "conditional";
       verdicts.back().parts.emplace_back(verdicts.back().number, rule_6a);
       for (std::size_t i = 1; i < cases.size(); ++i)
-        verdicts.back().parts.emplace_back(replicated_key("t(3)/t(d*) on " + cases[i].label, scene_at3[i], cases[i].spec),
-                                           rule_6a);
+        verdicts.back().parts.emplace_back(
+            replicated_key("t(3)/t(d*) on " + cases[i].label, scene_at3[i], cases[i].spec), rule_6a);
       reasons.push_back(fmt::format(
           "d = 3 holds on a scene when the 95% interval of t(3)/t(d*) lies below 1.10; it holds on {} of {} scenes, "
           "fails on {}, and {} undecided at this noise. The best d follows from the ratio of the cost per cell crossed "

@@ -148,7 +148,8 @@ def combine_parts(claim: str, rows: list):
     for r in rows:
         parts, where = r.get("parts") or [], r.get("path", "first process")
         if len(parts) != len(first):
-            raise ReplicateError(f"{where}: claim {claim} has {len(parts)} verdict parts, the first process {len(first)}")
+            raise ReplicateError(f"{where}: claim {claim} has {len(parts)} verdict parts, the first process "
+                                 f"{len(first)}")
         for a, b in zip(parts, first):
             for field in ("rule", "name", "threshold_direction", "threshold_tolerance"):
                 if a.get(field, "") != b.get(field, ""):

@@ -107,7 +107,8 @@ def parts(values, rule="conditional", names=("b", "sphereflake", "stadium"), thr
 
 
 def with_parts(value, part_values, **kw):
-    return dict(row(value, value - 0.001, value + 0.001, threshold=1.1, direction="below"), parts=parts(part_values, **kw))
+    first = row(value, value - 0.001, value + 0.001, threshold=1.1, direction="below")
+    return dict(first, parts=parts(part_values, **kw))
 
 
 class CombineParts(unittest.TestCase):
@@ -127,7 +128,8 @@ class CombineParts(unittest.TestCase):
         # Every part decided, holding on two scenes and failing on the third: holds only under conditions.
         rows = [with_parts(1.00, [1.00, 1.05, 1.2]), with_parts(1.01, [1.01, 1.04, 1.21]),
                 with_parts(1.00, [1.00, 1.06, 1.19])]
-        self.assertEqual(process_replicates.combine(rows[0], rows[1:])[0]["verdict"], "holds only under stated conditions")
+        self.assertEqual(process_replicates.combine(rows[0], rows[1:])[0]["verdict"],
+                         "holds only under stated conditions")
 
     def test_gated_rule(self):
         def gated(first_values, second_values):
