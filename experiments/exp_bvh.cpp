@@ -321,7 +321,7 @@ std::string bvh_versus_kdtree(Runner& run, const Options& opt, std::vector<Verdi
     test_ns.push_back(tri_ns);
     std::map<std::string, double> scene_tests;
     progress(fmt::format("bvh: table {}: {} and {} built {} times, alternating", s, kKdTree, kBvh2, kTableBuilds));
-    BuildPair built = best_builds(kKdTree, kBvh2, run.scene(s), 0, kTableBuilds);
+    const BuildPair built = best_builds(kKdTree, kBvh2, run.scene(s), 0, kTableBuilds);
     for (const std::string& a : {kKdTree, kBvh2}) {
       progress("bvh: table " + s + " " + a);
       const Aggregate* accel = a == kKdTree ? built.ours.get() : built.theirs.get();

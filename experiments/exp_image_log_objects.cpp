@@ -234,8 +234,8 @@ int main(int argc, char** argv) {
         "visits plus primitive tests. *ns/ray* is the median over {} alternated rounds at each N (each round traces "
         "every structure and Embree in turn, the fastest pass over {:.2g} s of the tracing thread's CPU time, at least "
         "one pass); a time over Embree's is taken per round, with its 95% bootstrap interval. Every fit is Ceres' "
-        "(lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error; *log fits better* compares the Akaike criteria of a + b·log2 N and c·N^α (both two "
-        "parameters). Command: `build/experiments/exp_image_log_objects --mode {}`.\n\n",
+        "(lib/cost/fit.h: relative residuals, Huber loss at 10%), ± one standard error; *log fits better* compares "
+        "the Akaike criteria of a + b·log2 N and c·N^α (both two parameters). Command: `build/experiments/exp_image_log_objects --mode {}`.\n\n",
         opt.full() ? 24 : 20, opt.full() ? 20 : 16, opt.full() ? 16 : 14, opt.full() ? 20 : 18, kTimeRounds,
         min_s / kTimeRounds, opt.mode);
     const std::string command = "build/experiments/exp_image_log_objects --mode " + opt.mode;

@@ -168,12 +168,13 @@ inline std::string decide_conditional(const std::vector<std::string>& cases) {
 }
 
 /// The verdict of a claim with a precondition: `cases[0]` must hold (refuted if it fails), and the
-/// other cases decide between confirmed (all hold) and holds only under stated conditions; inconclusive at
-/// this noise if any case is.
+/// other cases decide between confirmed (all hold) and holds only under stated conditions;
+/// inconclusive at this noise if any case is, or if there is none.
 inline std::string decide_gated(const std::vector<std::string>& cases) {
+  if (cases.empty()) return kInconclusive;
   for (const auto& c : cases)
     if (c == kInconclusive) return kInconclusive;
-  if (cases.empty() || cases[0] == kRefuted) return cases.empty() ? kInconclusive : kRefuted;
+  if (cases[0] == kRefuted) return kRefuted;
   for (std::size_t i = 1; i < cases.size(); ++i)
     if (cases[i] != kConfirmed) return kConditional;
   return kConfirmed;

@@ -123,11 +123,16 @@ def fmt(x: float) -> str:
     return f"{x:.4g}"
 
 
-def over_processes(claim: str, rows: list, direction: str, tolerance: float):
-    """(mean, lo, hi, threshold, verdict) of the rows' key_value over the processes: the t-interval,
-    the most demanding of their threshold_value, and the verdict that interval gives."""
-    values = [number(r, "key_value", r.get("path", "first process")) for r in rows]
-    thresholds = [number(r, "threshold_value", r.get("path", "first process")) for r in rows]
+def key_values(rows: list):
+    """The rows' key_value and threshold_value, one per process."""
+    return ([number(r, "key_value", r.get("path", "first process")) for r in rows],
+            [number(r, "threshold_value", r.get("path", "first process")) for r in rows])
+
+
+def over_processes(claim: str, values: list, thresholds: list, direction: str, tolerance: float):
+    """(mean, lo, hi, threshold, verdict) of one key number over the processes (`values`, with each
+    process's threshold): the t-interval, the most demanding threshold, and the verdict that
+    interval gives."""
     n = len(values)
     if n < 2:
         raise ReplicateError(f"claim {claim}: at least two processes are needed, got {n}")
@@ -166,10 +171,10 @@ def combine_parts(claim: str, rows: list):
     for j, part in enumerate(first):
         direction = part.get("threshold_direction", "")
         tolerance = number(part, "threshold_tolerance", part.get("path", "")) if direction == "within" else math.nan
-        column = [r["parts"][j] for r in rows]
-        mean, lo, hi, threshold, verdict = over_processes(claim, column, direction, tolerance)
+        values, thresholds = key_values([r["parts"][j] for r in rows])
+        mean, lo, hi, threshold, verdict = over_processes(claim, values, thresholds, direction, tolerance)
         verdicts.append(verdict)
-        md.append(f"| {part['name']} | {', '.join(fmt(number(c, 'key_value', '')) for c in column)} | "
+        md.append(f"| {part['name']} | {', '.join(fmt(v) for v in values)} | "
                   f"{fmt(mean)} [{fmt(lo)}, {fmt(hi)}] | {direction} {fmt(threshold)} | {verdict} |")
     return RULES[rule](verdicts), md
 
@@ -187,11 +192,10 @@ def combine(first: dict, replicates: list):
                 raise ReplicateError(f"{where}: {field} {r.get(field)!r} differs from the first process's "
                                      f"{first.get(field)!r}")
     direction = first.get("threshold_direction", "")
-    values = [number(r, "key_value", r.get("path", "first process")) for r in rows]
-    thresholds = [number(r, "threshold_value", r.get("path", "first process")) for r in rows]
+    values, thresholds = key_values(rows)
     n = len(values)
     tolerance = number(first, "threshold_tolerance", "first process") if direction == "within" else math.nan
-    mean, lo, hi, threshold, verdict = over_processes(claim, rows, direction, tolerance)
+    mean, lo, hi, threshold, verdict = over_processes(claim, values, thresholds, direction, tolerance)
     parts_md = []
     if first.get("parts") or any(r.get("parts") for r in replicates):
         if not first.get("parts"):
