@@ -75,16 +75,17 @@ std::string canonical_key(const std::string& spec) {
   }
 }
 
-/// The fastest of three single-threaded passes over a sample of rays of the choice's kind, in ns
+/// The fastest of kAutoSamplePasses single-threaded passes over `sample_rays` rays of the choice's kind, in ns
 /// per ray (mean over the kinds of `mixed`).
-double sampled_ns_per_ray(const Aggregate& accel, const std::shared_ptr<const Scene>& scene, const std::string& rays) {
+double sampled_ns_per_ray(const Aggregate& accel, const std::shared_ptr<const Scene>& scene, const std::string& rays,
+                          std::size_t sample_rays) {
   const std::vector<std::string> kinds = rays == "mixed" ? kMixedKinds : std::vector<std::string>{rays};
   double sum = 0;
   for (const std::string& kind : kinds) {
-    const std::string spec = kind + ":" + std::to_string(kAutoSampleRays / kinds.size());
+    const std::string spec = kind + ":" + std::to_string(sample_rays / kinds.size());
     const std::vector<Ray> sample = make_ray_set(spec, scene);
     double best = std::numeric_limits<double>::infinity();
-    for (int pass = 0; pass < 3; ++pass)
+    for (int pass = 0; pass < kAutoSamplePasses; ++pass)
       best = std::min(best, trace_rays(accel, sample, TraceOptions{1, false, is_any_hit_ray_spec(spec)}).seconds);
     sum += best / static_cast<double>(std::max<std::size_t>(sample.size(), 1)) * 1e9;
   }
@@ -166,9 +167,11 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   for (const auto& [spec, m] : models.build) build_by_key.emplace(canonical_key(spec), &m);
   for (const auto& [spec, m] : models.scene_trace) trace_by_key.emplace(canonical_key(spec), &m);
   std::vector<AutoCandidate> candidates;
+  std::vector<double> build_hi;     // each candidate's 90% upper build seconds (NaN when skipped)
   std::vector<std::size_t> ranked;  // predicted candidates, best first
   for (const std::string& spec : auto_candidate_specs(families, model_path)) {
     AutoCandidate c{spec, kNaN, ""};
+    double hi = kNaN;
     const std::string key = canonical_key(spec);
     const auto b_it = build_by_key.find(key);
     const auto t_it = trace_by_key.find(key);
@@ -202,11 +205,13 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
         c.predicted_total_s = objective(c.predicted_build_s, ns, choice.count);
         c.total_lo_s = objective(b_lo, ns_lo, choice.count);
         c.total_hi_s = objective(b_hi, ns_hi, choice.count);
+        hi = b_hi;
         if (std::isfinite(c.predicted_total_s)) ranked.push_back(candidates.size());
         else c.skipped = "the prediction is not a finite number";
       }
     }
     candidates.push_back(std::move(c));
+    build_hi.push_back(hi);
   }
   if (ranked.empty()) return nullptr;
   std::stable_sort(ranked.begin(), ranked.end(), [&](std::size_t a, std::size_t b) {
@@ -215,8 +220,10 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   choice.method = "predicted";
   choice.choose_s = seconds_since(start);
 
-  // Build the best (the next one when a builder refuses the spec), and the runner-up too when
-  // their 90% intervals overlap.
+  // Build the best (the next one when a builder refuses the spec). With a count, race the others
+  // whose 90% interval overlaps the best's, in rank order, while the race's estimated cost stays
+  // within kAutoSampleBudget of the best's predicted total: build each, time it on a sample, and
+  // keep the lowest measured total (only the leader so far is kept in memory).
   auto build = [&](std::size_t k) -> std::unique_ptr<Aggregate> {
     AutoCandidate& c = candidates[k];
     const auto t = Clock::now();
@@ -231,31 +238,49 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
       return nullptr;
     }
   };
-  std::unique_ptr<Aggregate> best, second;
-  std::size_t best_k = 0, second_k = 0, next = 0;
+  std::unique_ptr<Aggregate> best;
+  std::size_t best_k = 0, next = 0;
   while (!best && next < ranked.size()) best = build(best_k = ranked[next++]);
   if (!best) throw InputError("auto: no candidate the cost model " + model_path + " predicts could be built");
-  if (next < ranked.size() && choice.count > 0) {  // without a count the choice stays a pure function of the scene
-    second_k = ranked[next];
-    const AutoCandidate &b = candidates[best_k], &r = candidates[second_k];
-    const double budget = kAutoSampleBudget * b.predicted_total_s;
-    if (r.total_lo_s <= b.total_hi_s && r.predicted_build_s <= budget) second = build(second_k);
-  }
-  if (second) {
-    choice.sampled = true;
-    for (const std::size_t k : {best_k, second_k}) {
-      const Aggregate& a = k == best_k ? *best : *second;
-      candidates[k].measured_ns_per_ray = sampled_ns_per_ray(a, scene, choice.rays);
-    }
-    auto measured = [&](std::size_t k) {
-      return objective(candidates[k].measured_build_s, candidates[k].measured_ns_per_ray, choice.count);
+  const std::size_t predicted_k = best_k;
+  if (choice.count > 0) {  // without a count the choice stays a pure function of the scene
+    const std::size_t sample = auto_sample_rays(choice.count);
+    const double budget = kAutoSampleBudget * candidates[predicted_k].predicted_total_s;
+    // The most a candidate's race can cost: its build and its sample passes at their 90% upper ends.
+    auto race_cost = [&](std::size_t k, bool built) {
+      const double ns_hi = (candidates[k].total_hi_s - build_hi[k]) / choice.count * 1e9;
+      return (built ? 0.0 : build_hi[k]) + kAutoSamplePasses * static_cast<double>(sample) * ns_hi * 1e-9;
     };
-    choice.note = "the 90% intervals of " + candidates[best_k].spec + " and " + candidates[second_k].spec +
-                  " overlapped: both built and timed on " + std::to_string(kAutoSampleRays) +
-                  " rays, the lower measured total kept";
-    if (measured(second_k) < measured(best_k)) {
-      std::swap(best, second);
-      std::swap(best_k, second_k);
+    std::vector<std::size_t> racers;
+    double estimated = race_cost(predicted_k, true);
+    for (std::size_t i = next; i < ranked.size(); ++i) {
+      const std::size_t k = ranked[i];
+      if (candidates[k].total_lo_s > candidates[predicted_k].total_hi_s) continue;  // surely slower
+      if (estimated + race_cost(k, false) > budget) continue;
+      estimated += race_cost(k, false);
+      racers.push_back(k);
+    }
+    if (!racers.empty()) {
+      auto measured_total = [&](std::size_t k) {
+        return objective(candidates[k].measured_build_s, candidates[k].measured_ns_per_ray, choice.count);
+      };
+      candidates[best_k].measured_ns_per_ray = sampled_ns_per_ray(*best, scene, choice.rays, sample);
+      std::size_t raced = 1;
+      for (const std::size_t k : racers) {
+        std::unique_ptr<Aggregate> contender = build(k);
+        if (!contender) continue;
+        ++raced;
+        candidates[k].measured_ns_per_ray = sampled_ns_per_ray(*contender, scene, choice.rays, sample);
+        if (measured_total(k) < measured_total(best_k)) {
+          best = std::move(contender);
+          best_k = k;
+        }
+      }
+      choice.sampled = raced > 1;
+      choice.note = std::to_string(raced) + " candidates whose 90% intervals overlapped the best prediction's (" +
+                    candidates[predicted_k].spec + ") were built and timed on " + std::to_string(sample) +
+                    " rays each, within " + std::to_string(static_cast<int>(kAutoSampleBudget * 100)) +
+                    "% of its predicted total; the lowest measured total kept";
     }
   }
   const AutoCandidate& chosen = candidates[best_k];

@@ -15,12 +15,14 @@
 /// scene_trace_model.h), `auto` chooses BEFORE it builds (`method` "predicted"): from the scene's
 /// features alone (scene_features.h, one O(N) pass) it predicts each candidate's build seconds and
 /// its ns per ray, and keeps the candidate of least predicted build + N × trace time; candidates
-/// the model has no entry for (by accel_spec_key.h) are skipped. It builds only that one, unless
-/// the 90% intervals of the best two totals overlap and the runner-up's predicted build is at most
-/// kAutoSampleBudget of the best's predicted total (else a second build costs more than a wrong
-/// pick can): then it builds both, times each on
-/// kAutoSampleRays rays of the kind chosen for (the fastest of 3 passes, one thread), and keeps
-/// the lower measured build + N × trace time (`sampled`; a choice that then depends on timing).
+/// the model has no entry for (by accel_spec_key.h) are skipped. It builds that one, then races
+/// the others whose 90% interval of the total overlaps its own, in the order of their predicted
+/// totals, as long as the race's estimated cost (each racer's build and sample passes at the
+/// upper ends of their intervals) stays within kAutoSampleBudget of the best's predicted total:
+/// each racer is built and timed on auto_sample_rays(N) rays of the kind chosen for (the fastest
+/// of kAutoSamplePasses passes, one thread), and the lowest measured build + N × trace time is
+/// kept (`sampled`; a choice that then depends on timing). For few rays the budget admits no
+/// racer and only the predicted best is built; for many it admits every plausible one.
 /// Without `count` the predicted time per ray alone decides (as for infinitely many rays), and
 /// nothing is timed: the choice is a function of the scene and the model (the determinism suite
 /// builds `auto` so). A model file without those models gives
@@ -36,11 +38,21 @@
 namespace raylab {
 
 inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
-/// Rays each of the two best candidates is timed on when their intervals overlap (split evenly
-/// over the kinds of `mixed`).
+/// The rays each racing candidate is timed on (split evenly over the kinds of `mixed`): a
+/// thousandth of the count, within [kAutoSampleRays, kAutoSampleMaxRays].
 inline constexpr std::size_t kAutoSampleRays = 384;
-/// The most a second build may cost, as a fraction of the best candidate's predicted total.
-inline constexpr double kAutoSampleBudget = 0.1;
+inline constexpr std::size_t kAutoSampleMaxRays = 4096;
+inline constexpr int kAutoSamplePasses = 3;
+/// The most the race may cost (builds beyond the best and every sample pass, estimated at their
+/// intervals' upper ends), as a fraction of the best candidate's predicted total.
+inline constexpr double kAutoSampleBudget = 0.05;
+
+inline std::size_t auto_sample_rays(double count) {
+  const double thousandth = count / 1000.0;
+  if (!(thousandth > static_cast<double>(kAutoSampleRays))) return kAutoSampleRays;
+  if (thousandth >= static_cast<double>(kAutoSampleMaxRays)) return kAutoSampleMaxRays;
+  return static_cast<std::size_t>(thousandth);
+}
 
 struct AutoCandidate {
   std::string spec;
@@ -66,7 +78,7 @@ struct AutoChoice {
   double predicted_ns_per_ray = 0.0;
   std::vector<AutoCandidate> candidates;
   std::string method;  ///< "predicted" (chosen before building) or "built-all" (every candidate built)
-  std::string note;    ///< why built-all, or that both of two overlapping candidates were built
+  std::string note;    ///< why built-all, or which candidates were raced
   double count = 0;    ///< the rays chosen for (`count=`); 0 when not given
   /// Seconds from the scene to the choice: the feature pass and the predictions ("predicted"),
   /// or building and reading every candidate ("built-all"). Summed over the parts of an
@@ -77,7 +89,7 @@ struct AutoChoice {
   std::string runner_up;  ///< the second-best candidate, empty when there is none
   double runner_up_total_s = std::numeric_limits<double>::quiet_NaN();  ///< its predicted total (or ns per ray × count)
   std::size_t candidates_built = 0;
-  bool sampled = false;  ///< the best two overlapped: both built and timed on kAutoSampleRays rays
+  bool sampled = false;  ///< candidates raced: built and timed on auto_sample_rays(count) rays each
   /// The chosen candidate's extrapolation_factor (the largest over the parts of an instanced
   /// scene): above 1, the choice rests on models used outside their data, and auto warns once.
   double extrapolation_factor = 1.0;
