@@ -314,7 +314,7 @@ class CostModelExperiment {
 
   /// `auto:rays=KIND,count=N` for every N of kAutoRayCounts against the held-out sweep's candidate
   /// of least build + N × ns per ray (`best`), in kAutoRounds rounds. Builds: each round builds
-  /// every N's auto (choosing, its builds and its sampling pass) and its `best` in turn, wall
+  /// every N's auto (choosing, its race's builds and sample passes) and its `best` in turn, wall
   /// clock on one thread. Traces: every structure auto chose in any round and every `best`, built
   /// once, in kAutoRounds alternated rounds on the sweep's rays. Round r's total is its build plus
   /// N × round r's ns per ray of what was built (auto: of its round-r choice).
@@ -678,11 +678,11 @@ class CostModelExperiment {
                    "ratio", "ratio_lo", "ratio_hi", "rounds"});
     std::string md = fmt::format(
         "### `auto` that pays for itself: choose + build + trace\n\n**Goal** (stated before the figures): `auto:rays="
-        "KIND,count=N`'s whole cost (choosing, every build it makes, its sampling pass, then N × the time per ray of "
+        "KIND,count=N`'s whole cost (choosing, every build and sample pass of its race, then N × the time per ray of "
         "its choice) within 10% of the best candidate's build + N × its time per ray, in at least 90% of the cases; "
         "N = 10^4, 10^6 and 10^8 rays on each held-out scene and ray kind. *Best* is the candidate of least build + N "
-        "rays in the held-out sweep. Both are measured in {} rounds: each round builds auto and *best* in turn (wall "
-        "clock, 1 thread), and every structure auto chose in any round and every *best* are traced in {} alternated "
+        "rays in the held-out sweep. Both are measured in {} rounds: each round builds auto and *best* in turn, the "
+        "order reversed every other round (wall clock, 1 thread), and every structure auto chose in any round and every *best* are traced in {} alternated "
         "rounds on the sweep's {} rays per kind (the tracing thread's CPU time; the 10^6 and 10^8 figures scale "
         "them). Round r's total is its build plus N × round r's time per ray; totals are medians and the ratio "
         "(auto over best) the median of the per-round ratios, with 95% bootstrap intervals. A case is within 10% "
@@ -817,7 +817,7 @@ class CostModelExperiment {
     std::string best;
     AutoChoice choice;                  ///< the first round's
     std::vector<std::string> chosen;    ///< per round
-    std::vector<double> auto_build_s;   ///< per round: choosing, auto's builds and its sampling pass
+    std::vector<double> auto_build_s;   ///< per round: choosing, the builds and sample passes of auto's race
     std::vector<double> auto_total_s;   ///< per round: auto_build_s + count × ns per ray of the round's choice
     std::vector<double> best_total_s;   ///< per round: best's build + count × its ns per ray
     std::vector<std::string> chosen_and_best() const {

@@ -138,6 +138,15 @@ TEST(Replicates, GeometricMeanByRoundTakesEachRoundAcrossCases) {
   EXPECT_THROW(geometric_mean_by_round({{1, 0, 2}}), std::invalid_argument);
 }
 
+TEST(Replicates, AlternateRoundsReversesTheOrderEveryOtherRound) {
+  std::vector<int> calls;
+  const auto contender = [&](int id) { return [&calls, id] { calls.push_back(id); return static_cast<double>(id); }; };
+  const auto seconds = alternate_rounds({contender(0), contender(1), contender(2)}, 4);
+  EXPECT_EQ(calls, (std::vector<int>{0, 1, 2, 2, 1, 0, 0, 1, 2, 2, 1, 0}));
+  ASSERT_EQ(seconds.size(), 3u);
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(seconds[c], std::vector<double>(4, c)) << c;
+}
+
 TEST(Replicates, TimeReplicatesGivesOneTimePerContenderAndRound) {
   const auto scene = make_scene("sphere:n=200");
   const auto bvh = make_accelerator("bvh", scene);

@@ -161,8 +161,12 @@ std::vector<double> ReplicateTiming::ratios(std::size_t numerator, std::size_t d
 
 std::vector<std::vector<double>> alternate_rounds(const std::vector<std::function<double()>>& measure, int rounds) {
   std::vector<std::vector<double>> seconds(measure.size());
+  const std::size_t n = measure.size();
   for (int r = 0; r < rounds; ++r)
-    for (std::size_t c = 0; c < measure.size(); ++c) seconds[c].push_back(measure[c]());
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t c = r % 2 == 0 ? i : n - 1 - i;  // ABBA: no contender always runs first
+      seconds[c].push_back(measure[c]());
+    }
   return seconds;
 }
 

@@ -125,7 +125,9 @@ struct TimedCase {
 ReplicateTiming time_replicates(const std::vector<TimedCase>& cases, const ReplicateOptions& options);
 
 /// `rounds` alternated rounds of arbitrary timed work: seconds[c][r] = measure[c]() in round r,
-/// the contenders called in turn within each round (builds, for example, timed by the caller).
+/// the contenders called in turn within each round (builds, for example, timed by the caller):
+/// in the given order in even rounds and in reverse in odd ones (ABBA), so that no contender
+/// always runs first, after another's work has warmed or evicted the caches.
 std::vector<std::vector<double>> alternate_rounds(const std::vector<std::function<double()>>& measure, int rounds);
 
 /// The geometric mean of a ratio over several cases, replicated round by round: `values[c][r]` is
