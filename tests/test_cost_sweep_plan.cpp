@@ -262,6 +262,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     EXPECT_EQ(r.replicate, 0);
     EXPECT_EQ(r.cache_source, "");
     EXPECT_EQ(r.lines_per_ray_est, 0.0);
+    EXPECT_EQ(r.build_passes, 1);
   }
   // Rewritten with today's columns, they read back the same.
   const std::string path = scratch("rewritten.csv").string();
@@ -272,12 +273,14 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     r.replicate = 2;
     r.cache_source = "sysfs; sysconf differs: L3 335544320";
     r.working_set_bytes_est = 1234.5;
+    r.build_passes = 3;
     out << to_csv_row(r) << '\n';
   }
   const RunRecord back = read_runs_csv(path).front();
   EXPECT_EQ(back.replicate, 2);
   EXPECT_EQ(back.cache_source, "sysfs; sysconf differs: L3 335544320");
   EXPECT_EQ(back.working_set_bytes_est, 1234.5);
+  EXPECT_EQ(back.build_passes, 3);
   EXPECT_EQ(back.ns_per_ray_min, rows.front().ns_per_ray_min);
 }
 

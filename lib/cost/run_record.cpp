@@ -71,6 +71,7 @@ const std::vector<Column>& columns() {
       {"working_set_bytes_est", &RunRecord::working_set_bytes_est, true},
       {"bytes_over_l2", &RunRecord::bytes_over_l2, true},
       {"bytes_over_llc", &RunRecord::bytes_over_llc, true},
+      {"build_passes", &RunRecord::build_passes, true},
   };
   return table;
 }

@@ -114,12 +114,21 @@ ShardSpec parse_shard(const std::string& text);
 /// A structure built for measurement: the accelerator, its build time and its features.
 struct BuiltStructure {
   std::unique_ptr<Aggregate> accel;
-  double build_s = 0;
+  double build_s = 0;    ///< the fastest of build_passes builds
+  int build_passes = 1;
   TreeFeatures features;
 };
 
-/// Builds `accel_spec` on `scene` in an arena of `threads` threads and reads its features.
-BuiltStructure build_structure(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene, int threads);
+/// The builds a sweep times per structure: up to kSweepBuildPasses, fewer once they total
+/// kSweepBuildSeconds (a single build of a large scene is steady; a millisecond build is not).
+inline constexpr int kSweepBuildPasses = 3;
+inline constexpr double kSweepBuildSeconds = 0.5;
+
+/// Builds `accel_spec` on `scene` in an arena of `threads` threads, up to `max_passes` times
+/// (fewer once the builds total `max_seconds`; each build freed before the next, so no two are
+/// held at once), keeps the last and reads its features.
+BuiltStructure build_structure(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene, int threads,
+                               int max_passes = 1, double max_seconds = 0);
 
 /// Measures one case: times `built` against `embree` on `rays` (time_alternating), counts a
 /// separate pass, and fills every column of the row. `sweep` and `predict --measure` both time
