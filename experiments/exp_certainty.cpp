@@ -268,7 +268,8 @@ int main(int argc, char** argv) {
       // The exact path: fraction of rays per kind, and the cost against the exact oracle.
       CsvWriter path(opt.out + "/certainty_exact_path.csv",
                      {"scene", "rays", "rays_count", "exact_fallbacks_per_ray", "certified_ns_per_ray", "exact_ns_per_ray",
-                      "speedup_over_exact", "speedup_over_exact_lo", "speedup_over_exact_hi", "rounds"});
+                      "speedup_over_exact", "speedup_over_exact_lo", "speedup_over_exact_hi", "rounds",
+                      "certified_ns_per_ray_lo", "certified_ns_per_ray_hi", "exact_ns_per_ray_lo", "exact_ns_per_ray_hi"});
       md += "\nThe exact path: the fraction of rays for which `bvh:kernel=certified` asked the exact predicates "
             "(`exact_fallbacks_per_ray` of `raylab trace`), and its time per ray against the exact oracle `exact` "
             "(single thread, one pass each in alternated rounds; times are medians over the rounds, the speed-up "
@@ -309,7 +310,7 @@ int main(int argc, char** argv) {
           md += fmt::format("| `{}` | {} | {:.3f}% | {} | {} | {:.0f} [{:.0f}, {:.0f}] | {} |\n", scene_spec, kind,
                             100.0 * fallbacks, us(c_ns), us(e_ns), speedup.value, speedup.lo, speedup.hi, t.rounds());
           path.row(scene_spec, kind, rays.size(), fallbacks, c_ns.value, e_ns.value, speedup.value, speedup.lo, speedup.hi,
-                   t.rounds());
+                   t.rounds(), c_ns.lo, c_ns.hi, e_ns.lo, e_ns.hi);
         }
       }
       md += fmt::format("\nOn vertex-aimed rays (`vertices`, `touching`) the certified BVH is at least **{:.0f}x** "

@@ -253,7 +253,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
     };
     std::vector<std::size_t> racers;
     double estimated = race_cost(predicted_k, true);
-    for (std::size_t i = next; i < ranked.size(); ++i) {
+    for (std::size_t i = next; i < ranked.size() && racers.size() + 1 < kAutoMaxRacers; ++i) {
       const std::size_t k = ranked[i];
       if (candidates[k].total_lo_s > candidates[predicted_k].total_hi_s) continue;  // surely slower
       if (estimated + race_cost(k, false) > budget) continue;
