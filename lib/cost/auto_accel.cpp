@@ -223,7 +223,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   // Build the best (the next one when a builder refuses the spec). With a count, race the others
   // whose 90% interval overlaps the best's, in rank order, while the race's estimated cost stays
   // within kAutoSampleBudget of the best's predicted total: build each, time it on a sample, and
-  // keep the lowest measured total (only the leader so far is kept in memory).
+  // keep the lowest measured total (the leader and one contender held at once).
   auto build = [&](std::size_t k) -> std::unique_ptr<Aggregate> {
     AutoCandidate& c = candidates[k];
     const auto t = Clock::now();
@@ -253,7 +253,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
     };
     std::vector<std::size_t> racers;
     double estimated = race_cost(predicted_k, true);
-    for (std::size_t i = next; i < ranked.size() && racers.size() + 1 < kAutoMaxRacers; ++i) {
+    for (std::size_t i = next; i < ranked.size(); ++i) {
       const std::size_t k = ranked[i];
       if (candidates[k].total_lo_s > candidates[predicted_k].total_hi_s) continue;  // surely slower
       if (estimated + race_cost(k, false) > budget) continue;
@@ -277,10 +277,11 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
         }
       }
       choice.sampled = raced > 1;
-      choice.note = std::to_string(raced) + " candidates whose 90% intervals overlapped the best prediction's (" +
-                    candidates[predicted_k].spec + ") were built and timed on " + std::to_string(sample) +
-                    " rays each, within " + std::to_string(static_cast<int>(kAutoSampleBudget * 100)) +
-                    "% of its predicted total; the lowest measured total kept";
+      choice.note = std::to_string(raced) + " candidates raced (the best prediction, " + candidates[predicted_k].spec +
+                    ", and those whose 90% intervals overlapped its own, within " +
+                    std::to_string(static_cast<int>(kAutoSampleBudget * 100)) +
+                    "% of its predicted total): each built and timed on " + std::to_string(sample) +
+                    " rays, the lowest measured total kept";
     }
   }
   const AutoCandidate& chosen = candidates[best_k];
@@ -413,7 +414,7 @@ std::vector<std::string> auto_candidate_specs(const std::vector<std::string>& fa
       {"kdtree", {"kdtree", "kdtree:" + cost}},
       {"octree", {"octree", "octree:" + cost}},
       {"bsp", {"bsp"}},
-      {"grid", {"grid:d=1", "grid:d=2", "grid:d=3", "grid:d=5"}},
+      {"grid", {"grid:d=1", "grid:d=2", "grid:d=3", "grid:d=6"}},  // the densities the plans sweep
       {"nested-grid", {"nested-grid", "nested-grid:mode=two-level"}},
   };
   std::vector<std::string> specs;

@@ -15,18 +15,18 @@
 /// scene_trace_model.h), `auto` chooses BEFORE it builds (`method` "predicted"): from the scene's
 /// features alone (scene_features.h, one O(N) pass) it predicts each candidate's build seconds and
 /// its ns per ray, and keeps the candidate of least predicted build + N × trace time; candidates
-/// the model has no entry for (by accel_spec_key.h) are skipped. It builds that one, then races
-/// the others whose 90% interval of the total overlaps its own, in the order of their predicted
-/// totals (at most kAutoMaxRacers in all), as long as the race's estimated cost (each racer's build and sample passes at the
-/// upper ends of their intervals) stays within kAutoSampleBudget of the best's predicted total:
-/// each racer is built and timed on auto_sample_rays(N) rays of the kind chosen for (the fastest
-/// of kAutoSamplePasses passes, one thread), and the lowest measured build + N × trace time is
-/// kept (`sampled`; a choice that then depends on timing). For few rays the budget admits no
-/// racer and only the predicted best is built; for many it admits the plausible ones.
-/// Without `count` the predicted time per ray alone decides (as for infinitely many rays), and
-/// nothing is timed: the choice is a function of the scene and the model (the determinism suite
-/// builds `auto` so). A model file without those models gives
-/// today's behaviour (`method` "built-all"): every candidate built, the tree model's fastest kept.
+/// the model has no entry for (by accel_spec_key.h) are skipped. It builds that one, then races the
+/// others whose 90% interval of the total overlaps its own, in the order of their predicted totals,
+/// as long as the race's estimated cost (each racer's build and sample passes at the upper ends of
+/// their intervals) stays within kAutoSampleBudget of the best's predicted total: each racer is
+/// built and timed on auto_sample_rays(N) rays of the kind chosen for (the fastest of
+/// kAutoSamplePasses passes, one thread), and the lowest measured build + N × trace time is kept
+/// (`sampled`; a choice that then depends on timing). For few rays the budget admits no racer and
+/// only the predicted best is built; for many it admits the plausible ones. Without `count` the
+/// predicted time per ray alone decides (as for infinitely many rays), and nothing is timed: the
+/// choice is a function of the scene and the model (the determinism suite builds `auto` so). A
+/// model file without those models gives today's behaviour (`method` "built-all"): every candidate
+/// built, the tree model's fastest kept.
 #include <limits>
 #include <memory>
 #include <string>
@@ -43,8 +43,6 @@ inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
 inline constexpr std::size_t kAutoSampleRays = 384;
 inline constexpr std::size_t kAutoSampleMaxRays = 4096;
 inline constexpr int kAutoSamplePasses = 3;
-/// The most candidates a race builds, the predicted best included.
-inline constexpr std::size_t kAutoMaxRacers = 6;
 /// The most the race may cost (builds beyond the best and every sample pass, estimated at their
 /// intervals' upper ends), as a fraction of the best candidate's predicted total.
 inline constexpr double kAutoSampleBudget = 0.05;
