@@ -216,10 +216,13 @@ struct PacketKernel<CertifiedKernel> {
     using F = simd::Float<kLanes>;
     const auto prim = [p](int i) { return p[i / kPacketWidth].prim[i % kPacketWidth]; };
     const auto vertex = [p](int i, int k) { return p[i / kPacketWidth].vertex(i % kPacketWidth, k); };
-    // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds [lo, hi] on
-    // the exact t of every lane, the plane crossing's where the edge functions certify a
-    // crossing of the interior, else the vertices' depth range.
-    alignas(32) float lo[kLanes], hi[kLanes], ts[kLanes];
+    // CertifiedKernel::depth_bounds, lane by lane with the same operations: bounds on the exact
+    // t of every lane, the plane crossing's where the edge functions certify a crossing of the
+    // interior (tl, th, with the estimate ts: the lanes of `crossing`), else the vertices' depth
+    // range (its lower ends lo, read only to order the lanes: not with kAnyHit). lower() picks
+    // a lane's at each read, rather than storing tl over lo (a scalar store into a vector just
+    // stored stalls the reads).
+    alignas(32) float lo[kLanes], tl[kLanes], th[kLanes], ts[kLanes];
     unsigned crossing = 0;
     if (c.cull) {
       const F nB = F::broadcast(0.0f) - B;
@@ -240,16 +243,9 @@ struct PacketKernel<CertifiedKernel> {
       open &= ~((crossing & ((t_hi < tmin) | (t_lo > upper))) | (~crossing & ((range_hi < tmin) | (range_lo > upper))));
       if (open == 0) return -1;
       crossing &= open;
-      range_lo.store(lo), range_hi.store(hi);
-      if (crossing != 0) {
-        alignas(32) float tl[kLanes], th[kLanes];
-        t_lo.store(tl), t_hi.store(th), t.store(ts);
-        for (unsigned m = crossing; m != 0; m &= m - 1) {
-          const int i = std::countr_zero(m);
-          lo[i] = tl[i], hi[i] = th[i];
-        }
-      }
-    } else {
+      if constexpr (!kAnyHit) range_lo.store(lo);
+      if (crossing != 0) t_lo.store(tl), t_hi.store(th), t.store(ts);
+    } else if constexpr (!kAnyHit) {
       for (int i = 0; i < kLanes; ++i) lo[i] = -INFINITY;
     }
     alignas(32) float u[kLanes], v[kLanes], w[kLanes], b[kLanes], za[kLanes], zb[kLanes], zc[kLanes];
@@ -257,25 +253,26 @@ struct PacketKernel<CertifiedKernel> {
     // The open lanes, nearest lower depth bound first (lowest lane among equal ones; with kAnyHit
     // in lane order): once a lane becomes the first hit, the lanes whose lower bound lies beyond
     // it are dropped without the double stage.
+    const auto lower = [&](int i) { return (crossing >> i) & 1u ? tl[i] : lo[i]; };
     int last = -1;
     while (open != 0) {
       int i = std::countr_zero(open);
       if constexpr (!kAnyHit)
         for (unsigned m = open & (open - 1); m != 0; m &= m - 1)
-          if (lo[std::countr_zero(m)] < lo[i]) i = std::countr_zero(m);
+          if (lower(std::countr_zero(m)) < lower(i)) i = std::countr_zero(m);
       open &= ~(1u << i);
       if (c.has && c.prim == prim(i)) continue;
       const bool won =
           (crossing >> i) & 1u
               ? CertifiedKernel::decide_crossing(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), u[i], v[i], w[i],
-                                                 b[i], za[i], zb[i], zc[i], lo[i], hi[i], ts[i], hit)
+                                                 b[i], za[i], zb[i], zc[i], tl[i], th[i], ts[i], hit)
               : CertifiedKernel::decide_triangle(c, prim(i), vertex(i, 0), vertex(i, 1), vertex(i, 2), u[i], v[i], w[i],
                                                  b[i], za[i], zb[i], zc[i], hit);
       if (won) {
         last = i;
         if constexpr (kAnyHit) return i;
         for (unsigned m = open; m != 0; m &= m - 1)
-          if (lo[std::countr_zero(m)] > c.upper) open &= ~(1u << std::countr_zero(m));
+          if (lower(std::countr_zero(m)) > c.upper) open &= ~(1u << std::countr_zero(m));
       }
     }
     return last;
