@@ -73,6 +73,16 @@ std::size_t built_count(const AutoChoice& c) {
   return n;
 }
 
+/// The mismatches of `accel` against `reference` on the rays of `ray_spec`, one thread.
+std::size_t mismatches_against(const Aggregate& accel, const std::string& reference,
+                               const std::shared_ptr<const Scene>& scene, const std::string& ray_spec) {
+  const std::vector<Ray> rays = make_ray_set(ray_spec, scene);
+  const auto ref = make_accelerator(reference, scene);
+  return compare_hits(rays, trace_rays(accel, rays, {1}).hits, trace_rays(*ref, rays, {1}).hits,
+                      length(Vec3d(scene->bounds().diagonal())))
+      .mismatches;
+}
+
 /// The measured build + count × sampled trace seconds of a raced candidate.
 double measured_total(const AutoChoice& c, const AutoCandidate& k) {
   return k.measured_build_s + c.count * k.measured_ns_per_ray * 1e-9;
@@ -137,12 +147,7 @@ TEST(AutoAccel, ChoosesBeforeBuildingAndBuildsOnlyWhatItChose) {
   }
   EXPECT_TRUE(any_skipped);  // the candidates the tiny model has no entry for (bvh:width=2, octree, ...)
   EXPECT_FALSE(c.runner_up.empty());
-  // What it built traces correctly.
-  const std::vector<Ray> rays = make_ray_set("diffuse:512", scene);
-  const auto reference = make_accelerator("bvh", scene);
-  const TraceResult got = trace_rays(*accel, rays, {1});
-  const TraceResult ref = trace_rays(*reference, rays, {1});
-  EXPECT_EQ(compare_hits(rays, got.hits, ref.hits, length(Vec3d(scene->bounds().diagonal()))).mismatches, 0u);
+  EXPECT_EQ(mismatches_against(*accel, "bvh", scene, "diffuse:512"), 0u);  // what it built traces correctly
 }
 
 TEST(AutoAccel, TheChoiceMovesWithTheCountAsItsPredictionsSay) {
@@ -179,13 +184,7 @@ TEST(AutoAccel, ForManyRaysItRacesThePlausibleCandidatesAndKeepsTheMeasuredBest)
   EXPECT_EQ(c.sampled, overlapping > 1);
   expect_minimises_prediction(c);
   if (c.sampled) EXPECT_NE(c.note.find("timed on 4096 rays"), std::string::npos) << c.note;
-  // What it kept traces correctly.
-  const std::vector<Ray> rays = make_ray_set("diffuse:512", scene);
-  const auto reference = make_accelerator("bvh", scene);
-  EXPECT_EQ(compare_hits(rays, trace_rays(*accel, rays, {1}).hits, trace_rays(*reference, rays, {1}).hits,
-                         length(Vec3d(scene->bounds().diagonal())))
-                .mismatches,
-            0u);
+  EXPECT_EQ(mismatches_against(*accel, "bvh", scene, "diffuse:512"), 0u);  // what it kept traces correctly
 }
 
 TEST(AutoAccel, TheSampleIsAThousandthOfTheCountWithinItsBounds) {
@@ -220,12 +219,7 @@ TEST(AutoAccel, InstancedScenesChooseForEachPart) {
   const AutoChoice& c = choice_of(*accel);
   EXPECT_EQ(c.method, "predicted");
   EXPECT_GE(c.candidates_built, 1u);
-  const std::vector<Ray> rays = make_ray_set("primary:512", scene);
-  const auto reference = make_accelerator("embree", scene);
-  EXPECT_EQ(compare_hits(rays, trace_rays(*accel, rays, {1}).hits, trace_rays(*reference, rays, {1}).hits,
-                         length(Vec3d(scene->bounds().diagonal())))
-                .mismatches,
-            0u);
+  EXPECT_EQ(mismatches_against(*accel, "embree", scene, "primary:512"), 0u);
 }
 
 TEST(AutoAccel, WithoutBuildTimeModelsEveryCandidateIsBuiltAndSaysSo) {
