@@ -683,11 +683,12 @@ class CostModelExperiment {
         "its choice) within 10% of the best candidate's build + N × its time per ray, in at least 90% of the cases; "
         "N = 10^4, 10^6 and 10^8 rays on each held-out scene and ray kind. *Best* is the candidate of least build + N "
         "rays in the held-out sweep. Both are measured in {} rounds: each round builds auto and *best* in turn, the "
-        "order reversed every other round (wall clock, 1 thread), and every structure auto chose in any round and every *best* are traced in {} alternated "
-        "rounds on the sweep's {} rays per kind (the tracing thread's CPU time; the 10^6 and 10^8 figures scale "
-        "them). Round r's total is its build plus N × round r's time per ray; totals are medians and the ratio "
-        "(auto over best) the median of the per-round ratios, with 95% bootstrap intervals. A case is within 10% "
-        "when its whole interval is at most 1.10, beyond when none of it is, else not shown at this noise.\n\n"
+        "order reversed every other round (wall clock, 1 thread), and every structure auto chose in any round and "
+        "every *best* are traced in {} alternated rounds on the sweep's {} rays per kind (the tracing thread's CPU "
+        "time; the 10^6 and 10^8 figures scale them). Round r's total is its build plus N × round r's time per ray; "
+        "totals are medians and the ratio (auto over best) the median of the per-round ratios, with 95% bootstrap "
+        "intervals. A case is within 10% when its whole interval is at most 1.10, beyond when none of it is, else not "
+        "shown at this noise.\n\n"
         "| scene | rays | N | auto chose | built | choose s | auto total s [95%] | best | best total s [95%] | "
         "ratio [95%] | within 10% |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
         kAutoRounds, kAutoRounds, opt_.full() ? 65536 : 16384);

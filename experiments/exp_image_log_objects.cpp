@@ -149,8 +149,7 @@ int main(int argc, char** argv) {
           progress(fmt::format("image_log_objects: {} (N = {:.0f}) {}", spec, n, a));
           Run r;
           r.n = n;
-          std::unique_ptr<Aggregate> accel;
-          accel = make_accelerator(a, scene);
+          std::unique_ptr<Aggregate> accel = make_accelerator(a, scene);
           r.cost = trace_cost(*accel, rays, false, 0.0);  // the counters; the time comes from the rounds
           r.bytes = accel->stats().bytes;
           runs[fam.name][a].push_back(r);
