@@ -75,21 +75,36 @@ std::string canonical_key(const std::string& spec) {
   }
 }
 
-/// The fastest of kAutoSamplePasses single-threaded passes over `sample_rays` rays of the choice's kind, in ns
-/// per ray (mean over the kinds of `mixed`).
-double sampled_ns_per_ray(const Aggregate& accel, const std::shared_ptr<const Scene>& scene, const std::string& rays,
-                          std::size_t sample_rays) {
+/// The rays of one kind a race times every racer on.
+struct RaySample {
+  std::vector<Ray> rays;
+  bool any_hit = false;
+};
+
+/// `sample_rays` rays of the choice's kind (split evenly over the kinds of `mixed`), generated
+/// once per race: a diffuse or shadow ray set builds a tracer of its own (ray_sets.h).
+std::vector<RaySample> race_sample(const std::shared_ptr<const Scene>& scene, const std::string& rays,
+                                   std::size_t sample_rays) {
   const std::vector<std::string> kinds = rays == "mixed" ? kMixedKinds : std::vector<std::string>{rays};
-  double sum = 0;
+  std::vector<RaySample> sample;
   for (const std::string& kind : kinds) {
     const std::string spec = kind + ":" + std::to_string(sample_rays / kinds.size());
-    const std::vector<Ray> sample = make_ray_set(spec, scene);
+    sample.push_back({make_ray_set(spec, scene), is_any_hit_ray_spec(spec)});
+  }
+  return sample;
+}
+
+/// The fastest of kAutoSamplePasses single-threaded passes over each kind of the sample, in ns per
+/// ray (mean over the kinds).
+double sampled_ns_per_ray(const Aggregate& accel, const std::vector<RaySample>& sample) {
+  double sum = 0;
+  for (const RaySample& kind : sample) {
     double best = std::numeric_limits<double>::infinity();
     for (int pass = 0; pass < kAutoSamplePasses; ++pass)
-      best = std::min(best, trace_rays(accel, sample, TraceOptions{1, false, is_any_hit_ray_spec(spec)}).seconds);
-    sum += best / static_cast<double>(std::max<std::size_t>(sample.size(), 1)) * 1e9;
+      best = std::min(best, trace_rays(accel, kind.rays, TraceOptions{1, false, kind.any_hit}).seconds);
+    sum += best / static_cast<double>(std::max<std::size_t>(kind.rays.size(), 1)) * 1e9;
   }
-  return sum / static_cast<double>(kinds.size());
+  return sum / static_cast<double>(sample.size());
 }
 
 double predict_ns(const FamilyModel& model, const TreeFeatures& f, const std::string& rays, double primitives) {
@@ -167,11 +182,11 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   for (const auto& [spec, m] : models.build) build_by_key.emplace(canonical_key(spec), &m);
   for (const auto& [spec, m] : models.scene_trace) trace_by_key.emplace(canonical_key(spec), &m);
   std::vector<AutoCandidate> candidates;
-  std::vector<double> build_hi;     // each candidate's 90% upper build seconds (NaN when skipped)
+  std::vector<std::pair<double, double>> upper;  // each candidate's 90% upper build s and ns per ray
   std::vector<std::size_t> ranked;  // predicted candidates, best first
   for (const std::string& spec : auto_candidate_specs(families, model_path)) {
     AutoCandidate c{spec, kNaN, ""};
-    double hi = kNaN;
+    std::pair<double, double> upper_of_c{kNaN, kNaN};
     const std::string key = canonical_key(spec);
     const auto b_it = build_by_key.find(key);
     const auto t_it = trace_by_key.find(key);
@@ -205,13 +220,13 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
         c.predicted_total_s = objective(c.predicted_build_s, ns, choice.count);
         c.total_lo_s = objective(b_lo, ns_lo, choice.count);
         c.total_hi_s = objective(b_hi, ns_hi, choice.count);
-        hi = b_hi;
+        upper_of_c = {b_hi, ns_hi};
         if (std::isfinite(c.predicted_total_s)) ranked.push_back(candidates.size());
         else c.skipped = "the prediction is not a finite number";
       }
     }
     candidates.push_back(std::move(c));
-    build_hi.push_back(hi);
+    upper.push_back(upper_of_c);
   }
   if (ranked.empty()) return nullptr;
   std::stable_sort(ranked.begin(), ranked.end(), [&](std::size_t a, std::size_t b) {
@@ -246,31 +261,32 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   if (choice.count > 0) {  // without a count the choice stays a pure function of the scene
     const std::size_t sample = auto_sample_rays(choice.count);
     const double budget = kAutoSampleBudget * candidates[predicted_k].predicted_total_s;
-    // The most a candidate's race can cost: its build and its sample passes at their 90% upper ends.
-    auto race_cost = [&](std::size_t k, bool built) {
-      const double ns_hi = (candidates[k].total_hi_s - build_hi[k]) / choice.count * 1e9;
-      return (built ? 0.0 : build_hi[k]) + kAutoSamplePasses * static_cast<double>(sample) * ns_hi * 1e-9;
+    // What a candidate's sample passes can cost, at the 90% upper end of its ns per ray.
+    auto passes_cost = [&](std::size_t k) {
+      return kAutoSamplePasses * static_cast<double>(sample) * upper[k].second * 1e-9;
     };
     std::vector<std::size_t> racers;
-    double estimated = race_cost(predicted_k, true);
+    double estimated = passes_cost(predicted_k);
     for (std::size_t i = next; i < ranked.size(); ++i) {
       const std::size_t k = ranked[i];
       if (candidates[k].total_lo_s > candidates[predicted_k].total_hi_s) continue;  // surely slower
-      if (estimated + race_cost(k, false) > budget) continue;
-      estimated += race_cost(k, false);
+      const double cost = upper[k].first + passes_cost(k);
+      if (estimated + cost > budget) continue;
+      estimated += cost;
       racers.push_back(k);
     }
     if (!racers.empty()) {
       auto measured_total = [&](std::size_t k) {
         return objective(candidates[k].measured_build_s, candidates[k].measured_ns_per_ray, choice.count);
       };
-      candidates[best_k].measured_ns_per_ray = sampled_ns_per_ray(*best, scene, choice.rays, sample);
+      const std::vector<RaySample> rays = race_sample(scene, choice.rays, sample);
+      candidates[best_k].measured_ns_per_ray = sampled_ns_per_ray(*best, rays);
       std::size_t raced = 1;
       for (const std::size_t k : racers) {
         std::unique_ptr<Aggregate> contender = build(k);
         if (!contender) continue;
         ++raced;
-        candidates[k].measured_ns_per_ray = sampled_ns_per_ray(*contender, scene, choice.rays, sample);
+        candidates[k].measured_ns_per_ray = sampled_ns_per_ray(*contender, rays);
         if (measured_total(k) < measured_total(best_k)) {
           best = std::move(contender);
           best_k = k;
