@@ -109,8 +109,11 @@ void expect_minimises_prediction(const AutoChoice& c) {
     if (k.spec == c.chosen) chosen = &k;
   }
   ASSERT_NE(chosen, nullptr) << c.chosen << " was not raced";
-  for (const AutoCandidate& k : c.candidates)
-    if (k.built) EXPECT_LE(measured_total(c, *chosen), measured_total(c, k)) << k.spec;
+  for (const AutoCandidate& k : c.candidates) {
+    if (k.built) {
+      EXPECT_LE(measured_total(c, *chosen), measured_total(c, k)) << k.spec;
+    }
+  }
 }
 
 TEST(AutoAccel, ModelFileHasTheBuildAndSceneLevelModels) {
@@ -132,8 +135,11 @@ TEST(AutoAccel, ChoosesBeforeBuildingAndBuildsOnlyWhatItChose) {
   const AutoChoice& c = choice_of(*accel);
   EXPECT_EQ(c.method, "predicted");
   EXPECT_EQ(c.count, 10000.0);
-  if (c.sampled) EXPECT_GE(c.candidates_built, 2u);
-  else EXPECT_EQ(c.candidates_built, 1u);
+  if (c.sampled) {
+    EXPECT_GE(c.candidates_built, 2u);
+  } else {
+    EXPECT_EQ(c.candidates_built, 1u);
+  }
   EXPECT_EQ(built_count(c), c.candidates_built);
   expect_minimises_prediction(c);
   EXPECT_GT(c.choose_s, 0.0);
@@ -183,7 +189,9 @@ TEST(AutoAccel, ForManyRaysItRacesThePlausibleCandidatesAndKeepsTheMeasuredBest)
   EXPECT_EQ(built_count(c), c.candidates_built);
   EXPECT_EQ(c.sampled, overlapping > 1);
   expect_minimises_prediction(c);
-  if (c.sampled) EXPECT_NE(c.note.find("timed on 4096 rays"), std::string::npos) << c.note;
+  if (c.sampled) {
+    EXPECT_NE(c.note.find("timed on 4096 rays"), std::string::npos) << c.note;
+  }
   EXPECT_EQ(mismatches_against(*accel, "bvh", scene, "diffuse:512"), 0u);  // what it kept traces correctly
 }
 
@@ -270,8 +278,11 @@ TEST(AutoAccel, TraceHandsItsRayCountDownAndPrintsTheChoice) {
   EXPECT_TRUE(j.at("auto_runner_up").at("spec").is_string());
   EXPECT_TRUE(j.at("auto_runner_up").at("predicted_total_s").is_number());
   const std::size_t built = j.at("auto_candidates_built");
-  if (j.at("auto_sampled").get<bool>()) EXPECT_GE(built, 2u);
-  else EXPECT_EQ(built, 1u);
+  if (j.at("auto_sampled").get<bool>()) {
+    EXPECT_GE(built, 2u);
+  } else {
+    EXPECT_EQ(built, 1u);
+  }
   EXPECT_EQ(j.at("auto_extrapolation_factor").get<double>(), 1.0);  // 2000 triangles: inside 300..6000
   {
     std::stringstream warnings;
