@@ -68,10 +68,11 @@ struct MollerTrumboreKernel {
 /// `dir`, kx and ky the other two, swapped when dir[kz] < 0 to keep the winding; sx, sy, sz shear
 /// and scale the ray onto +z. Sets those six members of any kernel's context.
 template <class Context>
-void set_watertight_shear(Context& c, const Vec3f& dir) {
+[[gnu::always_inline]] inline void set_watertight_shear(Context& c, const Vec3f& dir) {
+  static constexpr int kNextAxis[3] = {1, 2, 0};
   c.kz = max_abs_axis(dir);
-  c.kx = (c.kz + 1) % 3;
-  c.ky = (c.kx + 1) % 3;
+  c.kx = kNextAxis[c.kz];
+  c.ky = kNextAxis[c.kx];
   if (dir[c.kz] < 0.0f) std::swap(c.kx, c.ky);
   c.sx = dir[c.kx] / dir[c.kz];
   c.sy = dir[c.ky] / dir[c.kz];
@@ -81,7 +82,7 @@ void set_watertight_shear(Context& c, const Vec3f& dir) {
 /// Sets `ctx` to Kernel::prepare(ray): in place where the kernel has prepare(Context&, const Ray&)
 /// (a context too large to return and move per ray), else by assignment.
 template <class Kernel>
-void prepare_context(typename Kernel::Context& ctx, const Ray& ray) {
+[[gnu::always_inline]] inline void prepare_context(typename Kernel::Context& ctx, const Ray& ray) {
   if constexpr (requires { Kernel::prepare(ctx, ray); }) Kernel::prepare(ctx, ray);
   else ctx = Kernel::prepare(ray);
 }
@@ -95,7 +96,7 @@ struct WatertightKernel {
     float sx, sy, sz;
     float tmin, tmax;
   };
-  static Context prepare(const Ray& ray) {
+  [[gnu::always_inline]] static Context prepare(const Ray& ray) {
     Context c;
     c.org = ray.org;
     c.dir = ray.dir;

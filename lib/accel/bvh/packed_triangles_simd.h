@@ -72,7 +72,7 @@ struct PacketKernel<WatertightKernel> {
   struct Ray {
     float ox, oy, oz, sx, sy, sz;
     Ray() = default;
-    explicit Ray(const WatertightKernel::Context& c)
+    [[gnu::always_inline]] explicit Ray(const WatertightKernel::Context& c)
         : ox(c.org[c.kx]), oy(c.org[c.ky]), oz(c.org[c.kz]), sx(c.sx), sy(c.sy), sz(c.sz) {}
   };
 
@@ -109,7 +109,10 @@ struct PacketKernel<WatertightKernel> {
       }
       U = F::load(u), V = F::load(v), W = F::load(w);
     }
-    const unsigned mixed = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
+    // The scalar kernel's sign test, (U < 0 || V < 0 || W < 0) && (U > 0 || V > 0 || W > 0), by
+    // the least and greatest of U, V, W: the same on every lane without a NaN, and a lane with one
+    // has det = NaN, which both reject.
+    const unsigned mixed = (min(min(U, V), W) < zero) & (max(max(U, V), W) > zero);
     const F det = U + V + W;
     unsigned ok = ~mixed & ~(det == zero) & finite(det) & ((1u << kLanes) - 1);
     if (ok == 0) return -1;
@@ -136,7 +139,7 @@ struct PacketKernel<CertifiedKernel> {
   struct Ray {
     float ox, oy, oz, sx, sy, sz;
     Ray() = default;
-    explicit Ray(const CertifiedKernel::Context& c)
+    [[gnu::always_inline]] explicit Ray(const CertifiedKernel::Context& c)
         : ox(c.ray.org[c.kx]), oy(c.ray.org[c.ky]), oz(c.ray.org[c.kz]), sx(c.sx), sy(c.sy), sz(c.sz) {}
   };
 
@@ -285,7 +288,7 @@ struct PacketKernel<MollerTrumboreKernel> {
   struct Ray {
     float o[3], d[3];
     Ray() = default;
-    explicit Ray(const MollerTrumboreKernel::Context& c) {
+    [[gnu::always_inline]] explicit Ray(const MollerTrumboreKernel::Context& c) {
       for (int a = 0; a < 3; ++a) {
         o[a] = c.ray.org[a];
         d[a] = c.ray.dir[a];

@@ -63,7 +63,7 @@ struct WideBoxRay<N, true> {
   bool fused;  ///< every inverse finite and non-zero, every c finite: the FMA test applies
   float tmin;
 
-  explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
+  [[gnu::always_inline]] explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
     // safe_inverse as one division: d + 0 turns -0 into +0, and IEEE 1/+0 is +inf.
     alignas(16) float i[4], c_near[4], c_far[4];
     const __m128 d = _mm_add_ps(_mm_setr_ps(r.dir.x, r.dir.y, r.dir.z, 1.0f), _mm_setzero_ps());
@@ -139,7 +139,7 @@ struct WideBoxRay<N, false> {
   int near[3], far[3];
   float tmin;
 
-  explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
+  [[gnu::always_inline]] explicit WideBoxRay(const Ray& r) : tmin(r.tmin) {
     for (int a = 0; a < 3; ++a) {
       const float d = std::abs(r.dir[a]) < 1e-18f ? std::copysign(1e-18f, r.dir[a]) : r.dir[a];
       const float i = 1.0f / d;
