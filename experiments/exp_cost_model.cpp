@@ -127,7 +127,8 @@ class CostModelExperiment {
         model_path_(opt.out + "/cost_model.json"),
         csv_(opt.out + "/cost_model.csv",
              {"part", "family", "level", "term", "value", "std_error", "scene", "rays", "accel", "measured_ns",
-              "counters_ns", "tree_ns", "sah80_ns", "sah15_ns", "ratio", "ratio_lo", "ratio_hi"}) {}
+              "counters_ns", "tree_ns", "sah80_ns", "sah15_ns", "ratio", "ratio_lo", "ratio_hi", "measured_ns_lo",
+              "measured_ns_hi", "measured_replicates"}) {}
 
   std::string run() {
     const std::vector<RunRecord> measured = data_set();
@@ -202,7 +203,8 @@ class CostModelExperiment {
         "highly optimized version\"). Here every structure of the lab is measured on {} scenes of {} to {} triangles ({} rows: "
         "each scene × the structures the plan runs on it × camera, diffuse and shadow rays, {} of them replicates "
         "measured again after the others on a rebuilt structure; single thread, each time the minimum of at least 5 passes "
-        "alternating with Embree's on the same rays), and two models are fitted per structure family with Ceres "
+        "alternating with Embree's on the same rays; cost_runs.csv gives each row's pass count `passes` and its range, "
+        "`ns_per_ray_min` to `ns_per_ray_max`, with the median between), and two models are fitted per structure family with Ceres "
         "(Huber loss at 10% on relative residuals, constants ≥ 0, standard errors from the covariance):\n\n"
         "- **counters**: ns/ray = c0 + c_node·nodes + c_leaf·leaves + c_test·tests [+ corrections], on the "
         "counters of a traced pass: the machine's constants; c_node:c_test is the lecture's C_trav:C_isect.\n"
@@ -229,7 +231,7 @@ class CostModelExperiment {
           s += fmt::format("{}{} {}", s.empty() ? "" : "; ", f.model.terms[j],
                            format_with_error(f.model.values[j], f.model.std_errors[j]));
           csv_.row("constants", family, level_name(f.model.level), f.model.terms[j], f.model.values[j],
-                   f.model.std_errors[j], "", "", "", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+                   f.model.std_errors[j], "", "", "", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, NAN, NAN, 0);
         }
         return s + fmt::format(" ({}, {:.3f})", pct(f.held_out_mape), f.held_out_r2);
       };
@@ -421,7 +423,9 @@ class CostModelExperiment {
         s->s80.push_back(a);
         s->s15.push_back(b);
       }
-      csv_.row("heldout", r.family, "", "", 0.0, 0.0, r.scene, r.rays, r.accel, r.ns_per_ray_min, c, t, a, b, 0.0, 0.0, 0.0);
+      // measured_ns is the fastest pass; [measured_ns_lo, measured_ns_hi] the passes' range.
+      csv_.row("heldout", r.family, "", "", 0.0, 0.0, r.scene, r.rays, r.accel, r.ns_per_ray_min, c, t, a, b, 0.0, 0.0, 0.0,
+               r.ns_per_ray_min, r.ns_per_ray_max, r.passes);
     }
     std::string md = fmt::format(
         "### Prediction on held-out scenes\n\n{} rows on scenes no fit has seen ({}), every candidate structure of "
@@ -529,7 +533,7 @@ class CostModelExperiment {
                         b.structure, b.ns_cost, b.ns_80, b.ns_15, speedup, b.speedup.lo, b.speedup.hi,
                         b.speedup.replicates);
       csv_.row("builders", b.structure, "", "", 0.0, 0.0, b.scene, b.kind, b.structure, b.ns_cost, b.ns_80, b.ns_15, 0.0,
-               0.0, b.speedup.value, b.speedup.lo, b.speedup.hi);
+               0.0, b.speedup.value, b.speedup.lo, b.speedup.hi, NAN, NAN, b.speedup.replicates);
     }
     for (const auto& [structure, v] : speedups)
       md += fmt::format("\n`{}`: geometric mean speed-up {:.2f}, lowest {:.2f}, {} of {} cases ≥ 0.98.", structure,
@@ -590,7 +594,7 @@ class CostModelExperiment {
                         best == chosen ? std::string("1 (the same)") : format_interval(ratio),
                         in ? "yes" : out ? "no" : "not shown");
       csv_.row("auto", structure_family(chosen), "", "", 0.0, 0.0, s, kind, chosen, chosen_t.value, best_t.value, 0.0, 0.0,
-               0.0, ratio.value, ratio.lo, ratio.hi);
+               0.0, ratio.value, ratio.lo, ratio.hi, chosen_t.lo, chosen_t.hi, chosen_t.replicates);
     }
     md += fmt::format("\n`auto` within 10% of the fastest by the intervals: {} of {} cases ({}); beyond it: {}; not shown "
                       "at this noise: {}.\n\n",
@@ -747,7 +751,7 @@ class CostModelExperiment {
     CsvWriter csv(opt_.out + "/cost_memory.csv",
                   {"family", "scene", "accel", "rays", "replicate", "primitives", "bytes", "l2_bytes", "llc_bytes",
                    "cache_source", "bytes_over_llc", "working_set_bytes_est", "lines_per_ray_est", "visits_per_ray",
-                   "measured_ns_per_visit", "counters_ns_per_visit"});
+                   "measured_ns_per_visit", "counters_ns_per_visit", "measured_ns_per_visit_hi", "passes"});
     struct Decade {
       std::vector<double> measured, model;
     };
@@ -761,7 +765,7 @@ class CostModelExperiment {
       const double measured = r.ns_per_ray_min / visits, model = set_.family(r.family).counters.model.predict(r) / visits;
       csv.row(r.family, r.scene, r.accel, r.rays, r.replicate, r.primitives, r.bytes, r.l2_bytes, r.llc_bytes,
               r.cache_source.empty() ? std::string("unrecorded") : r.cache_source, r.bytes_over_llc, r.working_set_bytes_est,
-              r.lines_per_ray_est, visits, measured, model);
+              r.lines_per_ray_est, visits, measured, model, r.ns_per_ray_max / visits, r.passes);
       Decade& d = by_family[r.family][static_cast<int>(std::floor(std::log10(std::max<double>(1, r.primitives))))];
       d.measured.push_back(measured);
       d.model.push_back(model);
@@ -792,7 +796,7 @@ class CostModelExperiment {
            "node visit (points, one per row of the data set) and the fitted counters model's prediction per visit "
            "(lines: medians per half decade) per structure family, against the scene's triangles (left) and the "
            "structure's bytes (right; dotted: this machine's L2 and last-level cache sizes). Log axes. Rows: "
-           "cost_memory.csv, which also holds the memory features of each row (bytes over the last-level cache, the "
+           "cost_memory.csv, which also gives each row's slowest pass per visit and its pass count, and the memory features of each row (bytes over the last-level cache, the "
            "estimated working set of a batch of " +
            std::to_string(kWorkingSetBatch) +
            " random lines and lines touched per ray: estimates from counts and surface areas, tree_features.h).*\n\n";

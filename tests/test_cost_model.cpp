@@ -236,7 +236,7 @@ std::vector<RunRecord> sweep_into(const SweepPlan& plan, const std::string& out,
 
 /// The columns a repeated measurement must reproduce exactly: identity, counters and features.
 std::string deterministic_part(RunRecord r) {
-  r.ns_per_ray_min = r.ns_per_ray_median = r.embree_ns_per_ray_min = r.build_s = 0;
+  r.ns_per_ray_min = r.ns_per_ray_median = r.ns_per_ray_max = r.embree_ns_per_ray_min = r.build_s = 0;
   r.passes = 0;
   r.build_passes = 0;  // fewer builds once they total kSweepBuildSeconds
   return to_csv_row(r);
@@ -278,6 +278,7 @@ TEST(CostSweep, ShardsMergeToTheUnshardedDataSet) {
     EXPECT_GT(whole[i].ns_per_ray_min, 0);
     EXPECT_GT(whole[i].embree_ns_per_ray_min, 0);
     EXPECT_LE(whole[i].ns_per_ray_min, whole[i].ns_per_ray_median);
+    EXPECT_LE(whole[i].ns_per_ray_median, whole[i].ns_per_ray_max);  // the passes' range
   }
   // Every case of the plan once, with its key.
   for (std::size_t i = 0; i < whole.size(); ++i) {
@@ -622,6 +623,31 @@ TEST(CostReplicates, ReplicateErrorIsTheMeanPairwiseSpreadOfCasesMeasuredAgain) 
   EXPECT_EQ(back.tree.model.covariance, kd.tree.model.covariance);
   const RunRecord probe = runs.front();
   EXPECT_DOUBLE_EQ(back.predict(ModelLevel::tree, probe).interval.hi, kd.predict(ModelLevel::tree, probe).interval.hi);
+}
+
+TEST(CostFitTarget, EmbreeNormalisedTimesScaleTheFastestAndSlowestPassAlike) {
+  auto row = [](const std::string& scene, double embree, double fastest, double slowest) {
+    RunRecord r;
+    r.scene = scene;
+    r.rays = "primary:64";
+    r.embree_ns_per_ray_min = embree;
+    r.ns_per_ray_min = fastest;
+    r.ns_per_ray_max = slowest;
+    return r;
+  };
+  // Scene a: Embree read 100 and 200 ns; the second row is brought to the first's Embree time.
+  const std::vector<RunRecord> runs = {row("a", 100, 50, 60), row("a", 200, 80, 120), row("b", 300, 90, 99)};
+  const std::vector<RunRecord> same = with_fit_target(runs, FitTarget::minimum);
+  EXPECT_EQ(same[1].ns_per_ray_min, 80);
+  EXPECT_EQ(same[1].ns_per_ray_max, 120);
+  const std::vector<RunRecord> scaled = with_fit_target(runs, FitTarget::embree_normalized);
+  EXPECT_DOUBLE_EQ(scaled[0].ns_per_ray_min, 50);
+  EXPECT_DOUBLE_EQ(scaled[0].ns_per_ray_max, 60);
+  EXPECT_DOUBLE_EQ(scaled[1].ns_per_ray_min, 40);
+  EXPECT_DOUBLE_EQ(scaled[1].ns_per_ray_max, 60);
+  EXPECT_DOUBLE_EQ(scaled[2].ns_per_ray_max, 99);
+  // A row without Embree's time cannot be normalised.
+  EXPECT_THROW(with_fit_target({row("a", 0, 50, 60)}, FitTarget::embree_normalized), InputError);
 }
 
 TEST(CostModelFile, TheCommittedModelLoadsWithIntervals) {

@@ -263,6 +263,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     EXPECT_EQ(r.cache_source, "");
     EXPECT_EQ(r.lines_per_ray_est, 0.0);
     EXPECT_EQ(r.build_passes, 1);
+    EXPECT_EQ(r.ns_per_ray_max, 0.0);  // the slowest pass: not recorded then
   }
   // Rewritten with today's columns, they read back the same.
   const std::string path = scratch("rewritten.csv").string();
@@ -274,6 +275,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     r.cache_source = "sysfs; sysconf differs: L3 335544320";
     r.working_set_bytes_est = 1234.5;
     r.build_passes = 3;
+    r.ns_per_ray_max = 2.5 * r.ns_per_ray_min;
     out << to_csv_row(r) << '\n';
   }
   const RunRecord back = read_runs_csv(path).front();
@@ -281,6 +283,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
   EXPECT_EQ(back.cache_source, "sysfs; sysconf differs: L3 335544320");
   EXPECT_EQ(back.working_set_bytes_est, 1234.5);
   EXPECT_EQ(back.build_passes, 3);
+  EXPECT_EQ(back.ns_per_ray_max, 2.5 * rows.front().ns_per_ray_min);
   EXPECT_EQ(back.ns_per_ray_min, rows.front().ns_per_ray_min);
 }
 

@@ -283,6 +283,7 @@ int run_predict_command(const PredictCommand& o) {
     const FamilyPrediction counters = model.predict(ModelLevel::counters, measured);
     j["measured_ns_per_ray"] = measured.ns_per_ray_min;
     j["measured_ns_per_ray_median"] = measured.ns_per_ray_median;
+    j["measured_ns_per_ray_max"] = measured.ns_per_ray_max;
     j["measured_in_interval90"] = tree.interval.lo <= measured.ns_per_ray_min && measured.ns_per_ray_min <= tree.interval.hi;
     j["passes"] = measured.passes;
     j["embree_ns_per_ray"] = measured.embree_ns_per_ray_min;

@@ -205,7 +205,11 @@ std::vector<RunRecord> with_fit_target(std::vector<RunRecord> runs, FitTarget ta
     auto [it, fresh] = least.try_emplace({r.scene, r.rays}, r.embree_ns_per_ray_min);
     if (!fresh) it->second = std::min(it->second, r.embree_ns_per_ray_min);
   }
-  for (RunRecord& r : runs) r.ns_per_ray_min *= least[{r.scene, r.rays}] / r.embree_ns_per_ray_min;
+  for (RunRecord& r : runs) {
+    const double scale = least[{r.scene, r.rays}] / r.embree_ns_per_ray_min;
+    r.ns_per_ray_min *= scale;
+    r.ns_per_ray_max *= scale;
+  }
   return runs;
 }
 

@@ -72,6 +72,7 @@ const std::vector<Column>& columns() {
       {"bytes_over_l2", &RunRecord::bytes_over_l2, true},
       {"bytes_over_llc", &RunRecord::bytes_over_llc, true},
       {"build_passes", &RunRecord::build_passes, true},
+      {"ns_per_ray_max", &RunRecord::ns_per_ray_max, true},
   };
   return table;
 }

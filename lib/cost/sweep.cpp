@@ -399,6 +399,7 @@ RunRecord measure_case(const SweepCase& c, const Scene& scene, const BuiltStruct
   r.clock = t.thread_cpu ? "thread_cpu" : "wall";
   r.ns_per_ray_min = t.ns_per_ray_min;
   r.ns_per_ray_median = t.ns_per_ray_median;
+  r.ns_per_ray_max = t.ns_per_ray_max;
   r.embree_ns_per_ray_min = t.embree_ns_per_ray_min;
   r.build_s = built.build_s;
   r.build_passes = built.build_passes;

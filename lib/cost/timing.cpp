@@ -39,6 +39,7 @@ AlternatingTiming time_alternating(const Primitive& ours, const Primitive* embre
   t.thread_cpu = thread_cpu;
   t.ns_per_ray_min = *std::min_element(mine.begin(), mine.end()) * per_ray;
   t.ns_per_ray_median = median_of(mine) * per_ray;
+  t.ns_per_ray_max = *std::max_element(mine.begin(), mine.end()) * per_ray;
   if (!theirs.empty()) {
     t.embree_ns_per_ray_min = *std::min_element(theirs.begin(), theirs.end()) * per_ray;
     t.embree_ns_per_ray_median = median_of(theirs) * per_ray;

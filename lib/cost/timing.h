@@ -28,6 +28,7 @@ struct AlternatingTiming {
   int passes = 0;
   bool thread_cpu = false;  ///< timed in CPU time of the tracing thread (threads = 1), else wall clock
   double ns_per_ray_min = 0, ns_per_ray_median = 0;  ///< ours
+  double ns_per_ray_max = 0;                         ///< ours, the slowest pass
   double embree_ns_per_ray_min = 0;                  ///< Embree's passes (0 when no Embree was given)
   double embree_ns_per_ray_median = 0;
 };
