@@ -204,8 +204,9 @@ class CostModelExperiment {
         "each scene × the structures the plan runs on it × camera, diffuse and shadow rays, {} of them replicates "
         "measured again after the others on a rebuilt structure; single thread, each time the minimum of at least 5 passes "
         "alternating with Embree's on the same rays; cost_runs.csv gives each row's pass count `passes` and its range, "
-        "`ns_per_ray_min` to `ns_per_ray_max`, with the median between), and two models are fitted per structure family with Ceres "
-        "(Huber loss at 10% on relative residuals, constants ≥ 0, standard errors from the covariance):\n\n"
+        "`ns_per_ray_min` to `ns_per_ray_max`, with the median between), and two models are fitted per structure "
+        "family with Ceres (Huber loss at 10% on relative residuals, constants ≥ 0, standard errors from the "
+        "covariance):\n\n"
         "- **counters**: ns/ray = c0 + c_node·nodes + c_leaf·leaves + c_test·tests [+ corrections], on the "
         "counters of a traced pass: the machine's constants; c_node:c_test is the lecture's C_trav:C_isect.\n"
         "- **tree**: the same form on the structure's surface-area expectations alone (Σ SA(n)/SA(root) interior "
@@ -424,8 +425,8 @@ class CostModelExperiment {
         s->s15.push_back(b);
       }
       // measured_ns is the fastest pass; [measured_ns_lo, measured_ns_hi] the passes' range.
-      csv_.row("heldout", r.family, "", "", 0.0, 0.0, r.scene, r.rays, r.accel, r.ns_per_ray_min, c, t, a, b, 0.0, 0.0, 0.0,
-               r.ns_per_ray_min, r.ns_per_ray_max, r.passes);
+      csv_.row("heldout", r.family, "", "", 0.0, 0.0, r.scene, r.rays, r.accel, r.ns_per_ray_min, c, t, a, b, 0.0, 0.0,
+               0.0, r.ns_per_ray_min, r.ns_per_ray_max, r.passes);
     }
     std::string md = fmt::format(
         "### Prediction on held-out scenes\n\n{} rows on scenes no fit has seen ({}), every candidate structure of "
@@ -796,7 +797,8 @@ class CostModelExperiment {
            "node visit (points, one per row of the data set) and the fitted counters model's prediction per visit "
            "(lines: medians per half decade) per structure family, against the scene's triangles (left) and the "
            "structure's bytes (right; dotted: this machine's L2 and last-level cache sizes). Log axes. Rows: "
-           "cost_memory.csv, which also gives each row's slowest pass per visit and its pass count, and the memory features of each row (bytes over the last-level cache, the "
+           "cost_memory.csv, which also gives each row's slowest pass per visit and its pass count, and the memory "
+           "features of each row (bytes over the last-level cache, the "
            "estimated working set of a batch of " +
            std::to_string(kWorkingSetBatch) +
            " random lines and lines touched per ray: estimates from counts and surface areas, tree_features.h).*\n\n";

@@ -36,7 +36,7 @@ struct RunRecord {
   std::int64_t passes = 0;
   std::string clock;  ///< thread_cpu | wall
   double ns_per_ray_min = 0, ns_per_ray_median = 0;
-  double ns_per_ray_max = 0;  ///< the slowest pass: [min, max] is the passes' range; 0 in data sets written before the column
+  double ns_per_ray_max = 0;  ///< the slowest pass ([min, max]: the passes' range); 0 in data sets before the column
   double embree_ns_per_ray_min = 0;
   double build_s = 0;            ///< the fastest of build_passes builds (sweep.h: kSweepBuildPasses)
   std::int64_t build_passes = 1;  ///< 1 in data sets written before the column
