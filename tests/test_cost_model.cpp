@@ -625,13 +625,14 @@ TEST(CostReplicates, ReplicateErrorIsTheMeanPairwiseSpreadOfCasesMeasuredAgain) 
   EXPECT_DOUBLE_EQ(back.predict(ModelLevel::tree, probe).interval.hi, kd.predict(ModelLevel::tree, probe).interval.hi);
 }
 
-TEST(CostFitTarget, EmbreeNormalisedTimesScaleTheFastestAndSlowestPassAlike) {
+TEST(CostFitTarget, EmbreeNormalisedTimesScaleEveryPassStatisticAlike) {
   auto row = [](const std::string& scene, double embree, double fastest, double slowest) {
     RunRecord r;
     r.scene = scene;
     r.rays = "primary:64";
     r.embree_ns_per_ray_min = embree;
     r.ns_per_ray_min = fastest;
+    r.ns_per_ray_median = 0.5 * (fastest + slowest);
     r.ns_per_ray_max = slowest;
     return r;
   };
@@ -644,6 +645,7 @@ TEST(CostFitTarget, EmbreeNormalisedTimesScaleTheFastestAndSlowestPassAlike) {
   EXPECT_DOUBLE_EQ(scaled[0].ns_per_ray_min, 50);
   EXPECT_DOUBLE_EQ(scaled[0].ns_per_ray_max, 60);
   EXPECT_DOUBLE_EQ(scaled[1].ns_per_ray_min, 40);
+  EXPECT_DOUBLE_EQ(scaled[1].ns_per_ray_median, 50);
   EXPECT_DOUBLE_EQ(scaled[1].ns_per_ray_max, 60);
   EXPECT_DOUBLE_EQ(scaled[2].ns_per_ray_max, 99);
   // A row without Embree's time cannot be normalised.

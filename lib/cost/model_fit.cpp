@@ -208,6 +208,7 @@ std::vector<RunRecord> with_fit_target(std::vector<RunRecord> runs, FitTarget ta
   for (RunRecord& r : runs) {
     const double scale = least[{r.scene, r.rays}] / r.embree_ns_per_ray_min;
     r.ns_per_ray_min *= scale;
+    r.ns_per_ray_median *= scale;
     r.ns_per_ray_max *= scale;
   }
   return runs;

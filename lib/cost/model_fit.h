@@ -146,8 +146,8 @@ const char* target_name(FitTarget target);
 /// "min" or "embree-normalized"; throws InputError otherwise.
 FitTarget parse_fit_target(const std::string& name);
 
-/// `runs` with ns_per_ray_min (and the slowest pass, ns_per_ray_max, by the same factor) replaced by the
-/// time `target` takes.
+/// `runs` with ns_per_ray_min replaced by the time `target` takes, and the passes' median and slowest
+/// (ns_per_ray_median, ns_per_ray_max) scaled by the same factor.
 std::vector<RunRecord> with_fit_target(std::vector<RunRecord> runs, FitTarget target);
 
 struct CostModelSet {
