@@ -176,7 +176,9 @@ class Runner {
               "hit_rate", "ns_per_ray", "embree_ns_per_ray", "throughput_vs_embree", "tri_share", "traversal_share",
               "embree_robust_ns_per_ray", "throughput_vs_embree_robust", "own_loop_vs_embree_direct", "ns_per_ray_lo",
               "ns_per_ray_hi", "throughput_vs_embree_lo", "throughput_vs_embree_hi", "build_s_lo", "build_s_hi",
-              "rounds"}) {}
+              "rounds", "embree_ns_per_ray_lo", "embree_ns_per_ray_hi", "embree_robust_ns_per_ray_lo",
+              "embree_robust_ns_per_ray_hi", "throughput_vs_embree_robust_lo", "throughput_vs_embree_robust_hi",
+              "own_loop_vs_embree_direct_lo", "own_loop_vs_embree_direct_hi"}) {}
 
   std::shared_ptr<const Scene> scene(const std::string& spec) {
     auto& s = scenes_[spec];
@@ -234,14 +236,17 @@ class Runner {
   std::pair<double, double> row(const std::string& part, const std::string& scene_spec, const std::string& ray_spec,
                                 const std::string& accel_spec, const std::string& param, int threads, double build_s,
                                 const Aggregate& accel, const Trace& t, double tri_ns = -1) {
-    return row(part, scene_spec, ray_spec, accel_spec, param, threads, build_s, accel, t, tri_ns, 0.0, 0.0);
+    return row(part, scene_spec, ray_spec, accel_spec, param, threads, build_s, accel, t, tri_ns, {}, {}, {});
   }
-  /// As above, with the `embree-robust` time on the same rays and the own-loop over direct-Embree
-  /// ratio (0: not measured).
+  /// As above, with the `embree-robust` time on the same rays and Embree-robust's time over ours
+  /// (per-round medians and their intervals), the own-loop over direct-Embree ratio, and the build
+  /// seconds' interval; an undefined IntervalEstimate is written as 0 (not measured).
   std::pair<double, double> row(const std::string& part, const std::string& scene_spec, const std::string& ray_spec,
                                 const std::string& accel_spec, const std::string& param, int threads, double build_s,
-                                const Aggregate& accel, const Trace& t, double tri_ns, double embree_robust_ns,
-                                double direct_ratio, const IntervalEstimate& build_ci = {}) {
+                                const Aggregate& accel, const Trace& t, double tri_ns,
+                                const IntervalEstimate& embree_robust_ns, const IntervalEstimate& vs_embree_robust,
+                                const IntervalEstimate& direct_ratio, const IntervalEstimate& build_ci = {}) {
+    const auto or0 = [](double x) { return std::isnan(x) ? 0.0 : x; };
     const auto s = scene(scene_spec);
     const double tris = s->total_primitive_count();
     const AccelStats st = accel.stats();
@@ -252,9 +257,11 @@ class Runner {
     }
     csv_.row(part, scene_spec, tris, ray_spec, rays(scene_spec, ray_spec).size(), accel_spec, param, threads, build_s,
              st.nodes, st.bytes, tris > 0 ? static_cast<double>(st.bytes) / tris : 0.0, st.sah_cost, t.nodes, t.leaves,
-             t.tests, t.hits_per_test, t.hit_rate, t.ns, t.embree_ns, t.ratio(), tri_share, trav_share, embree_robust_ns,
-             embree_robust_ns > 0 && t.ns > 0 ? embree_robust_ns / t.ns : 0.0, direct_ratio, t.ns_ci.lo, t.ns_ci.hi,
-             t.ratio_ci.lo, t.ratio_ci.hi, build_ci.lo, build_ci.hi, std::max(t.ns_ci.replicates, build_ci.replicates));
+             t.tests, t.hits_per_test, t.hit_rate, t.ns, t.embree_ns, t.ratio(), tri_share, trav_share,
+             or0(embree_robust_ns.value), or0(vs_embree_robust.value), or0(direct_ratio.value), t.ns_ci.lo, t.ns_ci.hi,
+             t.ratio_ci.lo, t.ratio_ci.hi, build_ci.lo, build_ci.hi, std::max(t.ns_ci.replicates, build_ci.replicates),
+             t.embree_ci.lo, t.embree_ci.hi, or0(embree_robust_ns.lo), or0(embree_robust_ns.hi),
+             or0(vs_embree_robust.lo), or0(vs_embree_robust.hi), or0(direct_ratio.lo), or0(direct_ratio.hi));
     return {tri_share, trav_share};
   }
 
@@ -332,7 +339,7 @@ std::string bvh_versus_kdtree(Runner& run, const Options& opt, std::vector<Verdi
       const IntervalEstimate& build_ci = a == kKdTree ? built.ours_ci : built.theirs_ci;
       const Trace t = run.trace(*accel, s, rays, 1);
       const auto [tri, trav] =
-          run.row("table", s, rays, a, a, 1, build_ci.value, *accel, t, tri_ns, 0.0, 0.0, build_ci);
+          run.row("table", s, rays, a, a, 1, build_ci.value, *accel, t, tri_ns, {}, {}, {}, build_ci);
       const double n = static_cast<double>(run.rays(s, rays).size());
       const auto seconds = [&](const IntervalEstimate& ns) {
         return fmt::format("{:.3f} [{:.3f}, {:.3f}]", ns.value * n * 1e-9, ns.lo * n * 1e-9, ns.hi * n * 1e-9);
@@ -828,15 +835,15 @@ std::string against_embree(Runner& run, const Options& opt) {
       (threads == 1 ? e1 : e2) = p.theirs_ci;
       bvh_bytes = p.ours->stats().bytes;
       embree_bytes = p.theirs->stats().bytes;
-      run.row("build", s, ray_kinds[0], "bvh", "", threads, p.ours_s, *p.ours, Trace{}, -1, 0.0, 0.0, p.ours_ci);
-      run.row("build", s, ray_kinds[0], "embree", "", threads, p.theirs_s, *p.theirs, Trace{}, -1, 0.0, 0.0, p.theirs_ci);
+      run.row("build", s, ray_kinds[0], "bvh", "", threads, p.ours_s, *p.ours, Trace{}, -1, {}, {}, {}, p.ours_ci);
+      run.row("build", s, ray_kinds[0], "embree", "", threads, p.theirs_s, *p.theirs, Trace{}, -1, {}, {}, {}, p.theirs_ci);
     }
     {
       const BuildPair p = best_builds("bvh:builder=spatial", "embree:quality=high", scene, 2, repeats);
       sb2 = p.ours_ci;
       eh2 = p.theirs_ci;
-      run.row("build", s, ray_kinds[0], "bvh:builder=spatial", "", 2, p.ours_s, *p.ours, Trace{}, -1, 0.0, 0.0, p.ours_ci);
-      run.row("build", s, ray_kinds[0], "embree:quality=high", "", 2, p.theirs_s, *p.theirs, Trace{}, -1, 0.0, 0.0,
+      run.row("build", s, ray_kinds[0], "bvh:builder=spatial", "", 2, p.ours_s, *p.ours, Trace{}, -1, {}, {}, {}, p.ours_ci);
+      run.row("build", s, ray_kinds[0], "embree:quality=high", "", 2, p.theirs_s, *p.theirs, Trace{}, -1, {}, {}, {},
               p.theirs_ci);
     }
     const double tris = scene->total_primitive_count();
@@ -867,7 +874,7 @@ std::string against_embree(Runner& run, const Options& opt) {
         ro.any_hit = any;
         const ReplicateTiming rt = time_replicates(timed, run.rays(s, r), ro);
         const std::size_t fast = accels.size(), robust = accels.size() + 1;
-        const double robust_ns = median(rt.ns[robust]);
+        const IntervalEstimate robust_ns = rt.ns_per_ray(robust);
         std::vector<Trace> t(accels.size());
         std::vector<double> direct(accels.size(), 0.0);
         std::vector<IntervalEstimate> direct_ci(accels.size());
@@ -879,7 +886,8 @@ std::string against_embree(Runner& run, const Options& opt) {
                                                 rounds_of(opt));
             direct[i] = direct_ci[i].value;
           }
-          run.row("speed", s, r, accels[i], "", threads, kNotTimed, *built[i], t[i], -1, robust_ns, direct[i]);
+          run.row("speed", s, r, accels[i], "", threads, kNotTimed, *built[i], t[i], -1, robust_ns, rt.ratio(robust, i),
+                  direct_ci[i]);
         }
         speed += fmt::format("| {} | {} | {} |", s, r, threads);
         for (const auto& c : columns) {
@@ -1025,7 +1033,7 @@ std::string reinsertion(Runner& run, const Options& opt) {
         t.take_times(rt, which, 2);
         const std::string spec = which == 0 ? "bvh:optimize=reinsert" : "bvh";
         run.row("reinsert", s, r, spec, "", 1, which == 0 ? optimised_s : plain_s, which == 0 ? *optimised : *plain, t,
-                -1, 0.0, 0.0, bootstrap_median(seconds[which == 0 ? 1 : 0]));  // seconds: plain, optimised, Embree
+                -1, {}, {}, {}, bootstrap_median(seconds[which == 0 ? 1 : 0]));  // seconds: plain, optimised, Embree
       }
     }
     run.forget_scene(s);

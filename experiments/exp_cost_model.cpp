@@ -307,11 +307,19 @@ class CostModelExperiment {
     }
     heldout_ = with_fit_target(heldout_, set_.target);
     for (const std::string& s : auto_overhead_scenes(opt_.full())) {
-      progress("exp_cost_model: auto's choosing time on " + s);
+      progress("exp_cost_model: auto's choosing time on " + s + ", " + std::to_string(kAutoRounds) + " rounds");
       const auto sc = scene(s);
-      const auto a = make_accelerator(fmt::format("auto:model={},rays=diffuse,count=1000000", model_path_), sc);
-      auto_overhead_.push_back({s, static_cast<double>(sc->total_primitive_count()),
-                                dynamic_cast<const AutoAccelerator&>(*a).choice()});
+      AutoOverhead o{s, static_cast<double>(sc->total_primitive_count()), {}, {}, {}};
+      for (int r = 0; r < kAutoRounds; ++r) {
+        const auto a = make_accelerator(fmt::format("auto:model={},rays=diffuse,count=1000000", model_path_), sc);
+        const AutoChoice& choice = dynamic_cast<const AutoAccelerator&>(*a).choice();
+        if (r == 0) o.choice = choice;
+        o.choose_s.push_back(choice.choose_s);
+        o.build_s.push_back(NAN);
+        for (const AutoCandidate& c : choice.candidates)
+          if (c.spec == choice.chosen) o.build_s.back() = c.measured_build_s;
+      }
+      auto_overhead_.push_back(std::move(o));
     }
   }
 
@@ -350,6 +358,7 @@ class CostModelExperiment {
         const AutoChoice& choice = dynamic_cast<const AutoAccelerator&>(*a).choice();
         if (t.chosen.empty()) t.choice = choice;
         t.chosen.push_back(choice.chosen);
+        t.choose_s.push_back(choice.choose_s);
         return seconds;
       });
       builds.push_back([&t, &sc] { return build_structure(t.best, sc, 1).build_s; });
@@ -681,7 +690,8 @@ class CostModelExperiment {
     CsvWriter csv(opt_.out + "/cost_auto.csv",
                   {"part", "scene", "rays", "count", "method", "chosen", "built", "choose_s", "build_s", "auto_total_s",
                    "auto_total_lo_s", "auto_total_hi_s", "best", "best_total_s", "best_total_lo_s", "best_total_hi_s",
-                   "ratio", "ratio_lo", "ratio_hi", "rounds"});
+                   "ratio", "ratio_lo", "ratio_hi", "rounds", "choose_lo_s", "choose_hi_s", "build_lo_s",
+                   "build_hi_s"});
     std::string md = fmt::format(
         "### `auto` that pays for itself: choose + build + trace\n\n**Goal** (stated before the figures): `auto:rays="
         "KIND,count=N`'s whole cost (choosing, every build and sample pass of its race, then N × the time per ray of "
@@ -694,7 +704,7 @@ class CostModelExperiment {
         "totals are medians and the ratio (auto over best) the median of the per-round ratios, with 95% bootstrap "
         "intervals. A case is within 10% when its whole interval is at most 1.10, beyond when none of it is, else not "
         "shown at this noise.\n\n"
-        "| scene | rays | N | auto chose | built | choose s | auto total s [95%] | best | best total s [95%] | "
+        "| scene | rays | N | auto chose | built | choose s [95%] | auto total s [95%] | best | best total s [95%] | "
         "ratio [95%] | within 10% |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
         kAutoRounds, kAutoRounds, opt_.full() ? 65536 : 16384);
     int within = 0, beyond = 0, total = 0;
@@ -713,34 +723,44 @@ class CostModelExperiment {
       const bool in = ratio.hi <= 1.10, out = ratio.lo > 1.10;
       within += in, beyond += out;
       ++total;
-      md += fmt::format("| {} | {} | {:.0e} | {} | {} | {:.4f} | {} | `{}` | {} | {} | {} |\n", t.scene, t.kind, t.count,
-                        chosen, t.choice.candidates_built, t.choice.choose_s, seconds(auto_total), t.best,
+      const IntervalEstimate choose = bootstrap_median(t.choose_s), build = bootstrap_median(t.auto_build_s);
+      md += fmt::format("| {} | {} | {:.0e} | {} | {} | {} | {} | `{}` | {} | {} | {} |\n", t.scene, t.kind, t.count,
+                        chosen, t.choice.candidates_built, seconds(choose), seconds(auto_total), t.best,
                         seconds(best_total), format_interval(ratio), in ? "yes" : out ? "no" : "not shown");
       csv.row("total", t.scene, t.kind, t.count, t.choice.method, t.choice.chosen, t.choice.candidates_built,
-              t.choice.choose_s, median(t.auto_build_s), auto_total.value, auto_total.lo, auto_total.hi, t.best,
-              best_total.value, best_total.lo, best_total.hi, ratio.value, ratio.lo, ratio.hi, ratio.replicates);
+              choose.value, build.value, auto_total.value, auto_total.lo, auto_total.hi, t.best, best_total.value,
+              best_total.lo, best_total.hi, ratio.value, ratio.lo, ratio.hi, ratio.replicates, choose.lo, choose.hi,
+              build.lo, build.hi);
     }
     md += fmt::format(
         "\n`auto` within 10% of the best candidate's build + trace by the intervals: **{} of {} cases ({})**; beyond "
         "it: {}; not shown at this noise: {}; goal ≥ 90% within: {}. Method: {} (\"predicted\": chosen from the "
         "scene's features, the build-time and scene-level models, before any build; \"built-all\": every candidate "
-        "built). *choose s* and *built* are the first round's.\n\n",
+        "built). *built* is the first round's; *choose s* the median over the rounds.\n\n",
         within, total, pct(total ? double(within) / total : 0.0), beyond, total - within - beyond,
         total && within >= 0.9 * total ? "met" : "not met",
         auto_totals_.empty() ? std::string("none") : auto_totals_.front().choice.method);
-    md += "**Choosing time against the build it saves**, `auto:rays=diffuse,count=1e6` on scenes of 10^5 triangles "
-          "and more (goal: choosing ≤ 5% of the chosen structure's build):\n\n"
-          "| scene | triangles | chose | built | choose s | its build s | choose / build |\n"
-          "|---|---|---|---|---|---|---|\n";
+    md += fmt::format(
+        "**Choosing time against the build it saves**, `auto:rays=diffuse,count=1e6` on scenes of 10^5 triangles "
+        "and more (goal: choosing ≤ 5% of the chosen structure's build), each built {} times in a row (wall clock, "
+        "medians with 95% bootstrap intervals, the ratio taken per round):\n\n"
+        "| scene | triangles | chose | built | choose s [95%] | its build s [95%] | choose / build [95%] | rounds |\n"
+        "|---|---|---|---|---|---|---|---|\n",
+        kAutoRounds);
     for (const AutoOverhead& o : auto_overhead_) {
-      double build_s = NAN;
-      for (const AutoCandidate& c : o.choice.candidates)
-        if (c.spec == o.choice.chosen) build_s = c.measured_build_s;
-      md += fmt::format("| {} | {:.3g} | `{}` | {} | {:.4f} | {:.3f} | {} |\n", o.scene, o.triangles, o.choice.chosen,
-                        o.choice.candidates_built, o.choice.choose_s, build_s,
-                        std::isfinite(build_s) ? pct(o.choice.choose_s / build_s) : std::string("n/a"));
+      const IntervalEstimate choose = bootstrap_median(o.choose_s);
+      const bool built = std::all_of(o.build_s.begin(), o.build_s.end(), [](double b) { return std::isfinite(b); });
+      IntervalEstimate build, ratio;
+      if (built) build = bootstrap_median(o.build_s), ratio = bootstrap_median(per_round_ratios(o.choose_s, o.build_s));
+      const auto percent = [](const IntervalEstimate& x) {
+        return fmt::format("{} [{}, {}]", pct(x.value), pct(x.lo), pct(x.hi));
+      };
+      md += fmt::format("| {} | {:.3g} | `{}` | {} | {} | {} | {} | {} |\n", o.scene, o.triangles, o.choice.chosen,
+                        o.choice.candidates_built, seconds(choose), built ? seconds(build) : std::string("n/a"),
+                        built ? percent(ratio) : std::string("n/a"), o.choose_s.size());
       csv.row("overhead", o.scene, "diffuse", 1e6, o.choice.method, o.choice.chosen, o.choice.candidates_built,
-              o.choice.choose_s, build_s, NAN, NAN, NAN, "", NAN, NAN, NAN, o.choice.choose_s / build_s, NAN, NAN, 1);
+              choose.value, build.value, NAN, NAN, NAN, "", NAN, NAN, NAN, ratio.value, ratio.lo, ratio.hi,
+              choose.replicates, choose.lo, choose.hi, build.lo, build.hi);
     }
     return md + "\n";
   }
@@ -825,6 +845,7 @@ class CostModelExperiment {
     std::string best;
     AutoChoice choice;                  ///< the first round's
     std::vector<std::string> chosen;    ///< per round
+    std::vector<double> choose_s;       ///< per round: choosing alone
     std::vector<double> auto_build_s;   ///< per round: choosing, the builds and sample passes of auto's race
     std::vector<double> auto_total_s;   ///< per round: auto_build_s + count × ns per ray of the round's choice
     std::vector<double> best_total_s;   ///< per round: best's build + count × its ns per ray
@@ -838,7 +859,9 @@ class CostModelExperiment {
   struct AutoOverhead {
     std::string scene;
     double triangles;
-    AutoChoice choice;
+    AutoChoice choice;             ///< the first round's
+    std::vector<double> choose_s;  ///< per round: choosing, wall clock
+    std::vector<double> build_s;   ///< per round: the chosen structure's build (NaN: auto did not build it)
   };
   std::vector<AutoOverhead> auto_overhead_;
   /// The counters model's held-out MAPE over all rows and its 95% bootstrap interval over held-out scenes.

@@ -262,7 +262,8 @@ int main(int argc, char** argv) {
                   {"experiment", "scene", "scene_spec", "primitives", "accel", "d", "rays", "ns_per_ray",
                    "embree_ns_per_ray", "ratio_to_embree", "prim_tests_per_ray", "cells_per_ray",
                    "mailbox_skips_per_ray", "build_s", "bytes", "cells", "hit_rate", "ns_per_ray_lo", "ns_per_ray_hi",
-                   "rounds", "ratio_to_embree_lo", "ratio_to_embree_hi", "build_s_lo", "build_s_hi", "build_rounds"});
+                   "rounds", "ratio_to_embree_lo", "ratio_to_embree_hi", "build_s_lo", "build_s_hi", "build_rounds",
+                   "embree_ns_per_ray_lo", "embree_ns_per_ray_hi"});
     // One row per timed case, with Embree's time from the same alternated rounds; ratio_to_embree
     // is the median of the per-round ratios t / t(Embree) with its 95% bootstrap interval.
     auto row = [&](const std::string& exp, const Case& c, const std::string& accel, double d, const Measured& m,
@@ -270,7 +271,8 @@ int main(int argc, char** argv) {
       const IntervalEstimate ratio = time_ratio(m, embree);
       csv.row(exp, c.label, c.spec, c.scene->primitive_count(), accel, d, c.rays.size(), m.ns, embree.ns, ratio.value,
               m.tests, m.cells, m.skips, m.build_s, m.bytes, m.nodes, m.hit_rate, m.ns_ci.lo, m.ns_ci.hi,
-              m.ns_ci.replicates, ratio.lo, ratio.hi, m.build_ci.lo, m.build_ci.hi, m.build_ci.replicates);
+              m.ns_ci.replicates, ratio.lo, ratio.hi, m.build_ci.lo, m.build_ci.hi, m.build_ci.replicates,
+              embree.ns_ci.lo, embree.ns_ci.hi);
     };
     const auto ns_text = [](const Measured& m) { return format_interval(m.ns_ci); };
     for (auto& c : cases) {
@@ -510,7 +512,8 @@ int main(int argc, char** argv) {
       CsvWriter teapot_csv(opt.out + "/grids_teapot.csv",
                            {"ratio", "scene", "accel", "rays", "ops_per_ray", "tests_per_ray", "cells_per_ray", "ns_per_ray",
                             "embree_ns_per_ray", "ns_per_ray_lo", "ns_per_ray_hi", "time_over_embree",
-                            "time_over_embree_lo", "time_over_embree_hi", "rounds"});
+                            "time_over_embree_lo", "time_over_embree_hi", "rounds", "embree_ns_per_ray_lo",
+                            "embree_ns_per_ray_hi"});
       FitsCsv teapot_fits(opt.out + "/grids_fits.csv");
       std::map<std::string, std::vector<double>> fit_r, fit_ops;
       std::map<std::string, std::map<double, TraceCost>> at;
@@ -536,10 +539,10 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < teapot_accels.size(); ++i) {
           const std::string& a = teapot_accels[i];
           TraceCost& c = costs[a];
-          const IntervalEstimate ns = t.ns_per_ray(i), over = t.ratio(i, e);
+          const IntervalEstimate ns = t.ns_per_ray(i), over = t.ratio(i, e), embree = t.ns_per_ray(e);
           c.ns = ns.value;
-          teapot_csv.row(ratio, spec, a, teapot_rays.size(), c.ops(), c.tests, c.nodes, c.ns, t.ns_per_ray(e).value,
-                         ns.lo, ns.hi, over.value, over.lo, over.hi, t.rounds());
+          teapot_csv.row(ratio, spec, a, teapot_rays.size(), c.ops(), c.tests, c.nodes, c.ns, embree.value, ns.lo, ns.hi,
+                         over.value, over.lo, over.hi, t.rounds(), embree.lo, embree.hi);
           at[a][ratio] = c;
           over_embree[a][ratio] = over;
           if (i == e) embree_ns[ratio] = ns;
@@ -797,7 +800,8 @@ int main(int argc, char** argv) {
             const auto build_row = [&](const char* exp, const IntervalEstimate& seconds, std::size_t bytes,
                                        std::size_t nodes) {
               csv.row(exp, c.label, c.spec, c.scene->primitive_count(), spec, d, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                      seconds.value, bytes, nodes, 0.0, 0.0, 0.0, 0, 0.0, 0.0, seconds.lo, seconds.hi, kRounds);
+                      seconds.value, bytes, nodes, 0.0, 0.0, 0.0, 0, 0.0, 0.0, seconds.lo, seconds.hi, kRounds, 0.0,
+                      0.0);
             };
             const std::size_t ref_bytes = static_cast<std::size_t>(refs) * sizeof(std::uint32_t);
             build_row("goal_build", build, m.bytes, m.nodes);
@@ -841,7 +845,7 @@ int main(int argc, char** argv) {
                                ratio = bootstrap_median(per_round_ratios(t[1], t[0]));
         csv.row("goal_nested_build", big.label, big.spec, big.scene->primitive_count(), "nested-grid", 3.0, 0, 0.0, 0.0,
                 0.0, 0.0, 0.0, 0.0, nested_s.value, nested_stats.bytes, nested_stats.nodes, 0.0, 0.0, 0.0, 0, 0.0,
-                0.0, nested_s.lo, nested_s.hi, kRounds);
+                0.0, nested_s.lo, nested_s.hi, kRounds, 0.0, 0.0);
         md += fmt::format("\nNested grid build on {} (default parameters): {} s against the uniform grid's {} s "
                           "(`grid`, default), {}× (goal ≤ 2×; medians [95% bootstrap intervals] over {} alternated "
                           "rounds, the ratio taken per round, thread CPU time).\n\n",

@@ -258,7 +258,7 @@ int main(int argc, char** argv) {
       CsvWriter nf(opt.out + "/robustness_nonfinite.csv",
                    {"accel", "rays", "ns_valid", "ns_invalid", "ns_mixed", "ratio_invalid", "ratio_mixed", "invalid_hits",
                     "ns_valid_lo", "ns_valid_hi", "ratio_invalid_lo", "ratio_invalid_hi", "ratio_mixed_lo",
-                    "ratio_mixed_hi", "rounds"});
+                    "ratio_mixed_hi", "rounds", "ns_invalid_lo", "ns_invalid_hi", "ns_mixed_lo", "ns_mixed_hi"});
       const int rounds = opt.full() ? 2 * kNonFiniteRounds : kNonFiniteRounds;
       md += fmt::format("\n### Non-finite rays\n\n{} random lines on `{}`; then the same rays with a NaN origin, an "
                         "infinite direction, a NaN tmax or a zero direction (invalid), and half of them invalid "
@@ -266,7 +266,8 @@ int main(int argc, char** argv) {
                         "rounds that trace the valid, invalid and mixed rays in turn; ratios are taken per round, with "
                         "95% bootstrap intervals in brackets. The claim is no slowdown beyond 2.5×.\n\n",
                         valid.size(), scene->spec, rounds);
-      md += "| accelerator | valid ns/ray [95%] | invalid ns/ray | mixed ns/ray | invalid / valid [95%] | mixed / valid [95%] "
+      md += "| accelerator | valid ns/ray [95%] | invalid ns/ray [95%] | mixed ns/ray [95%] | invalid / valid [95%] | "
+            "mixed / valid [95%] "
             "| rounds | hits on invalid rays |\n|---|---|---|---|---|---|---|---|\n";
       for (const auto& spec : specs) {
         if (spec.rfind("brute", 0) == 0) continue;  // |rays| x |triangles|: too slow to time here
@@ -285,11 +286,13 @@ int main(int argc, char** argv) {
         }
         const IntervalEstimate a = bootstrap_median(ns[0]), bi = bootstrap_median(invalid_ratio),
                                mi = bootstrap_median(mixed_ratio);
-        const double b = median(ns[1]), m = median(ns[2]);
+        const IntervalEstimate b = bootstrap_median(ns[1]), m = bootstrap_median(ns[2]);
         const std::size_t hits = trace_rays(*accel, invalid, TraceOptions{1, false, false}).hit_count;
-        nf.row(spec, valid.size(), a.value, b, m, bi.value, mi.value, hits, a.lo, a.hi, bi.lo, bi.hi, mi.lo, mi.hi, rounds);
-        md += fmt::format("| `{}` | {} | {:.1f} | {:.1f} | {} | {} | {} | {} |\n", spec, format_interval(a, 3), b, m,
-                          format_interval(bi), format_interval(mi), rounds, hits);
+        nf.row(spec, valid.size(), a.value, b.value, m.value, bi.value, mi.value, hits, a.lo, a.hi, bi.lo, bi.hi, mi.lo,
+               mi.hi, rounds, b.lo, b.hi, m.lo, m.hi);
+        md += fmt::format("| `{}` | {} | {} | {} | {} | {} | {} | {} |\n", spec, format_interval(a, 3),
+                          format_interval(b, 3), format_interval(m, 3), format_interval(bi), format_interval(mi), rounds,
+                          hits);
       }
     }
 

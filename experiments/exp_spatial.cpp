@@ -34,7 +34,7 @@ struct Measured {
   std::size_t triangles = 0;
   double build_s = 0, ns = 0, embree_ns = 0, nodes_per_ray = 0, leaves_per_ray = 0, tests_per_ray = 0;
   AccelStats stats;
-  IntervalEstimate ns_ci, ratio_ci;  ///< medians over the replicate rounds with 95% bootstrap intervals (ratio: Embree's over ours)
+  IntervalEstimate ns_ci, embree_ci, ratio_ci;  ///< medians over the replicate rounds with 95% bootstrap intervals (ratio: Embree's over ours)
   IntervalEstimate build_ci;         ///< build seconds: the median over kBuildRounds builds with its interval
   std::vector<double> ratios;        ///< Embree's time over ours, one per replicate round
   /// Throughput relative to Embree: the median per-round ratio when replicated, else the ratio of the times.
@@ -85,7 +85,8 @@ class Runner {
              {"part", "scene", "triangles", "ray_spec", "rays", "accel", "param", "build_s", "nodes", "bytes", "sah_cost",
               "nodes_per_ray", "leaves_per_ray", "tests_per_ray", "ns_per_ray", "embree_ns_per_ray",
               "throughput_vs_embree", "ns_per_ray_lo", "ns_per_ray_hi", "throughput_vs_embree_lo",
-              "throughput_vs_embree_hi", "build_s_lo", "build_s_hi", "rounds"}) {}
+              "throughput_vs_embree_hi", "build_s_lo", "build_s_hi", "rounds", "embree_ns_per_ray_lo",
+              "embree_ns_per_ray_hi"}) {}
 
   std::shared_ptr<const Scene> scene(const std::string& spec) {
     auto& s = scenes_[spec];
@@ -146,12 +147,13 @@ class Runner {
       m.ratio_ci = t.ratio(1, 0);
       m.ratios = t.ratios(1, 0);
       m.ns = m.ns_ci.value;
-      m.embree_ns = median(t.ns[1]);
+      m.embree_ci = t.ns_per_ray(1);
+      m.embree_ns = m.embree_ci.value;
     }
     csv_.row(part, scene_spec, m.triangles, ray_spec, r.size(), accel_spec, param, m.build_s, m.stats.nodes, m.stats.bytes,
              m.stats.sah_cost, m.nodes_per_ray, m.leaves_per_ray, m.tests_per_ray, m.ns, m.embree_ns, m.ratio(),
              m.ns_ci.lo, m.ns_ci.hi, m.ratio_ci.lo, m.ratio_ci.hi, m.build_ci.defined() ? m.build_ci.lo : 0.0,
-             m.build_ci.defined() ? m.build_ci.hi : 0.0, m.ns_ci.replicates);
+             m.build_ci.defined() ? m.build_ci.hi : 0.0, m.ns_ci.replicates, m.embree_ci.lo, m.embree_ci.hi);
     return m;
   }
 
@@ -176,7 +178,7 @@ class Runner {
     for (std::size_t i = 0; i < accel_specs.size(); ++i)
       csv_.row(part, scene_spec, s->mesh.size(), "", 0, accel_specs[i], params[i], median(seconds[i]), stats[i].nodes,
                stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-               bootstrap_median(seconds[i]).lo, bootstrap_median(seconds[i]).hi, rounds);
+               bootstrap_median(seconds[i]).lo, bootstrap_median(seconds[i]).hi, rounds, 0.0, 0.0);
     return seconds;
   }
 
@@ -209,7 +211,8 @@ class Runner {
     for (std::size_t i = 0; i < specs.size(); ++i) {
       const IntervalEstimate e = bootstrap_median(b.seconds[i]);
       csv_.row("goal_build", scene_spec, s->mesh.size(), "", 0, specs[i].first, specs[i].second, e.value, stats[i].nodes,
-               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, e.lo, e.hi, rounds);
+               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, e.lo, e.hi, rounds, 0.0,
+               0.0);
     }
     return b;
   }
@@ -238,10 +241,10 @@ class Runner {
     c.cold = time_replicates({accel.get(), embree.get()}, cold, o);
     c.warm = time_replicates({accel.get(), embree.get()}, warm, o);
     for (const auto& [param, n, t] : {std::tuple{"cold", cold.size(), &c.cold}, std::tuple{"warm", warm.size(), &c.warm}}) {
-      const IntervalEstimate ns = t->ns_per_ray(0), ratio = t->ratio(1, 0);
+      const IntervalEstimate ns = t->ns_per_ray(0), embree_ns = t->ns_per_ray(1), ratio = t->ratio(1, 0);
       csv_.row("cache", scene_spec, s->mesh.size(), ray_spec, n, accel_spec, param, 0.0, stats.nodes, stats.bytes,
-               stats.sah_cost, 0.0, 0.0, 0.0, ns.value, median(t->ns[1]), ratio.value, ns.lo, ns.hi, ratio.lo, ratio.hi,
-               0.0, 0.0, t->rounds());
+               stats.sah_cost, 0.0, 0.0, 0.0, ns.value, embree_ns.value, ratio.value, ns.lo, ns.hi, ratio.lo, ratio.hi,
+               0.0, 0.0, t->rounds(), embree_ns.lo, embree_ns.hi);
     }
     return c;
   }
@@ -633,7 +636,7 @@ int main(int argc, char** argv) {
           "medians over the rounds, with 95% bootstrap intervals in brackets.\n\n",
           kWarmRepeats, kTraceRounds);
       md += "| scene, rays | bytes/triangle | Embree bytes/triangle | ns/ray cold [95%] | ns/ray warm [95%] | Embree "
-            "cold | Embree warm | vs Embree, cold [95%] | vs Embree, warm [95%] | rounds |\n"
+            "cold [95%] | Embree warm [95%] | vs Embree, cold [95%] | vs Embree, warm [95%] | rounds |\n"
             "|---|---|---|---|---|---|---|---|---|---|\n";
       double log_bytes_sum = 0;
       std::vector<std::vector<double>> warm_ratios;
@@ -641,9 +644,10 @@ int main(int argc, char** argv) {
       for (const auto& m : meshes)
         for (const auto& r : {goal_primary, goal_diffuse}) {
           const CacheSplit c = run.cache_split(m, r, "kdtree");
-          md += fmt::format("| {}, {} | {:.0f} | {:.0f} | {} | {} | {:.0f} | {:.0f} | {} | {} | {} |\n", m, r,
+          md += fmt::format("| {}, {} | {:.0f} | {:.0f} | {} | {} | {} | {} | {} | {} | {} |\n", m, r,
                             c.bytes_per_triangle, c.embree_bytes_per_triangle, format_interval(c.cold.ns_per_ray(0)),
-                            format_interval(c.warm.ns_per_ray(0)), median(c.cold.ns[1]), median(c.warm.ns[1]),
+                            format_interval(c.warm.ns_per_ray(0)), format_interval(c.cold.ns_per_ray(1)),
+                            format_interval(c.warm.ns_per_ray(1)),
                             format_interval(c.cold.ratio(1, 0)), format_interval(c.warm.ratio(1, 0)), c.cold.rounds());
           warm_ratios.push_back(c.warm.ratios(1, 0));
           cold_ratios[r].push_back(c.cold.ratios(1, 0));

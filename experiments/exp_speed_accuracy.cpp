@@ -23,6 +23,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
 #include "cost/model_file.h"
+#include "cost/replicates.h"
 #include "experiment_common.h"
 #include "scene/scene_spec.h"
 
@@ -119,11 +120,6 @@ RoundTimes alternated_rounds(const Primitive& method, const Primitive& embree,
 struct Ratio {
   double value = 0, lo = 0, hi = 0;
 };
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 Ratio bootstrap_ratio(const RoundTimes& t) {
   const std::size_t n = t.method_s.size();
   std::mt19937_64 rng(20261204);
@@ -166,7 +162,8 @@ int main(int argc, char** argv) {
                                        "missed_hits", "wrong_t", "ties", "error_rate", "rule", "within_bound"};
     for (const char* c : kErrorClassNames) header.push_back(std::string("rays_") + c), header.push_back(std::string("mismatches_") + c);
     for (const char* c : {"ordinary_rays", "rounds", "ns_per_ray", "embree_ns_per_ray", "throughput_vs_embree",
-                          "throughput_ci95_lo", "throughput_ci95_hi", "bound"})
+                          "throughput_ci95_lo", "throughput_ci95_hi", "bound", "ns_per_ray_lo", "ns_per_ray_hi",
+                          "embree_ns_per_ray_lo", "embree_ns_per_ray_hi"})
       header.push_back(c);
     CsvWriter csv(opt.out + "/speed_accuracy.csv", header);
 
@@ -263,16 +260,17 @@ int main(int argc, char** argv) {
         const RoundTimes times = alternated_rounds(*built[scene.get()], *embree, ordinary, kMinRounds, min_s);
         p.throughput = bootstrap_ratio(times);
         p.rounds = times.method_s.size();
-        const double ms = median(times.method_s), es = median(times.embree_s);
         const double per_ray = 1e9 / static_cast<double>(ordinary_rays_per_family);
+        const IntervalEstimate ms = bootstrap_median(times.method_s), es = bootstrap_median(times.embree_s);
         const auto write = [&](const std::string& label, const Tally& t) {
           csv.row(fam.name, fam.spec, m, label, t.rays, t.mismatches, t.false_hits, t.missed, t.wrong_t, t.ties, t.rate(),
                   std::string(bound.exact ? "exact" : "tolerance"), t.within ? 1 : 0, t.class_rays[kCrossing],
                   t.class_mismatches[kCrossing], t.class_rays[kTouching], t.class_mismatches[kTouching],
                   t.class_rays[kGrazing], t.class_mismatches[kGrazing], t.class_rays[kOnSurface],
                   t.class_mismatches[kOnSurface], t.class_rays[kFar], t.class_mismatches[kFar], ordinary_rays_per_family,
-                  p.rounds, ms * per_ray, es * per_ray, p.throughput.value, p.throughput.lo, p.throughput.hi,
-                  bound_text(bound));
+                  p.rounds, ms.value * per_ray, es.value * per_ray, p.throughput.value, p.throughput.lo,
+                  p.throughput.hi, bound_text(bound), ms.lo * per_ray, ms.hi * per_ray, es.lo * per_ray,
+                  es.hi * per_ray);
         };
         for (std::size_t i = 0; i < sets.size(); ++i) write(sets[i].label, tallies[i]);
         write("all", p.all);
@@ -287,7 +285,8 @@ int main(int argc, char** argv) {
         "on ordinary rays only ({} primary, diffuse and shadow rays, the shadow rays as any-hit queries), single "
         "thread, timed in the tracing thread's CPU time, in at least {} rounds alternated with Embree's on the same "
         "rays; the ratio is the median of Embree's round times over the median of the method's, with its 95% "
-        "bootstrap interval over the rounds (ns_per_ray and embree_ns_per_ray in the CSV are the medians). "
+        "bootstrap interval over the rounds (ns_per_ray and embree_ns_per_ray in the CSV are the medians, each with "
+        "its own 95% bootstrap interval, *_lo and *_hi). "
         "**Accuracy**: the error rate on adversarial rays, the fraction whose closest hit disagrees with the exact "
         "oracle (`exact`): false hits, missed hits and wrong first hits, by the rule the method's accuracy bound is "
         "stated in (`raylab trace --check`'s tolerance for float methods; for methods stated exact, the same primitive "

@@ -287,16 +287,20 @@ inline double thread_cpu_seconds_of(const std::function<void()>& f) {
   return static_cast<double>(end.tv_sec - start.tv_sec) + 1e-9 * static_cast<double>(end.tv_nsec - start.tv_nsec);
 }
 
-/// A CSV file written row by row.
+/// A CSV file written row by row. Contract: every row has one value per column (std::logic_error
+/// otherwise, before anything of the row is written).
 class CsvWriter {
  public:
-  CsvWriter(const std::string& path, const std::vector<std::string>& columns) : out_(path) {
+  CsvWriter(const std::string& path, const std::vector<std::string>& columns) : out_(path), path_(path), columns_(columns.size()) {
     if (!out_) throw InputError("cannot write " + path);
     for (std::size_t i = 0; i < columns.size(); ++i) out_ << (i ? "," : "") << columns[i];
     out_ << "\n";
   }
   template <class... T>
   void row(const T&... values) {
+    if (sizeof...(T) != columns_)
+      throw std::logic_error(path_ + ": a row of " + std::to_string(sizeof...(T)) + " values for " +
+                             std::to_string(columns_) + " columns");
     std::size_t i = 0;
     ((out_ << (i++ ? "," : "") << field(values)), ...);
     out_ << "\n";
@@ -312,6 +316,8 @@ class CsvWriter {
   }
 
   std::ofstream out_;
+  std::string path_;
+  std::size_t columns_;
 };
 
 /// Writes `verdicts` to OUT/<section>.verdicts.csv (replacing an earlier run's).

@@ -237,6 +237,7 @@ std::vector<RunRecord> sweep_into(const SweepPlan& plan, const std::string& out,
 /// The columns a repeated measurement must reproduce exactly: identity, counters and features.
 std::string deterministic_part(RunRecord r) {
   r.ns_per_ray_min = r.ns_per_ray_median = r.ns_per_ray_max = r.embree_ns_per_ray_min = r.build_s = 0;
+  r.embree_ns_per_ray_max = r.build_s_max = 0;
   r.passes = 0;
   r.build_passes = 0;  // fewer builds once they total kSweepBuildSeconds
   return to_csv_row(r);
@@ -279,6 +280,8 @@ TEST(CostSweep, ShardsMergeToTheUnshardedDataSet) {
     EXPECT_GT(whole[i].embree_ns_per_ray_min, 0);
     EXPECT_LE(whole[i].ns_per_ray_min, whole[i].ns_per_ray_median);
     EXPECT_LE(whole[i].ns_per_ray_median, whole[i].ns_per_ray_max);  // the passes' range
+    EXPECT_LE(whole[i].embree_ns_per_ray_min, whole[i].embree_ns_per_ray_max);
+    EXPECT_LE(whole[i].build_s, whole[i].build_s_max);
   }
   // Every case of the plan once, with its key.
   for (std::size_t i = 0; i < whole.size(); ++i) {

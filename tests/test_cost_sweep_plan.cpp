@@ -264,6 +264,8 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     EXPECT_EQ(r.lines_per_ray_est, 0.0);
     EXPECT_EQ(r.build_passes, 1);
     EXPECT_EQ(r.ns_per_ray_max, 0.0);  // the slowest pass: not recorded then
+    EXPECT_EQ(r.embree_ns_per_ray_max, 0.0);
+    EXPECT_EQ(r.build_s_max, 0.0);
   }
   // Rewritten with today's columns, they read back the same.
   const std::string path = scratch("rewritten.csv").string();
@@ -276,6 +278,8 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     r.working_set_bytes_est = 1234.5;
     r.build_passes = 3;
     r.ns_per_ray_max = 2.5 * r.ns_per_ray_min;
+    r.embree_ns_per_ray_max = 1.5 * r.embree_ns_per_ray_min;
+    r.build_s_max = 3 * r.build_s;
     out << to_csv_row(r) << '\n';
   }
   const RunRecord back = read_runs_csv(path).front();
@@ -285,6 +289,8 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
   EXPECT_EQ(back.build_passes, 3);
   EXPECT_EQ(back.ns_per_ray_max, 2.5 * rows.front().ns_per_ray_min);
   EXPECT_EQ(back.ns_per_ray_min, rows.front().ns_per_ray_min);
+  EXPECT_EQ(back.embree_ns_per_ray_max, 1.5 * rows.front().embree_ns_per_ray_min);
+  EXPECT_EQ(back.build_s_max, 3 * rows.front().build_s);
 }
 
 TEST(CostMemoryFeatures, EstimatesFollowTheirDefinitions) {

@@ -287,6 +287,7 @@ int run_predict_command(const PredictCommand& o) {
     j["measured_in_interval90"] = tree.interval.lo <= measured.ns_per_ray_min && measured.ns_per_ray_min <= tree.interval.hi;
     j["passes"] = measured.passes;
     j["embree_ns_per_ray"] = measured.embree_ns_per_ray_min;
+    j["embree_ns_per_ray_max"] = measured.embree_ns_per_ray_max;
     j["predicted_from_counters_ns_per_ray"] = counters.interval.ns;
     j["interval90_from_counters_ns_per_ray"] = interval_json(counters.interval);
     j["nodes_per_ray"] = measured.nodes_per_ray;

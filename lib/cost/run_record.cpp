@@ -73,6 +73,8 @@ const std::vector<Column>& columns() {
       {"bytes_over_llc", &RunRecord::bytes_over_llc, true},
       {"build_passes", &RunRecord::build_passes, true},
       {"ns_per_ray_max", &RunRecord::ns_per_ray_max, true},
+      {"embree_ns_per_ray_max", &RunRecord::embree_ns_per_ray_max, true},
+      {"build_s_max", &RunRecord::build_s_max, true},
   };
   return table;
 }

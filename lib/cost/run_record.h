@@ -40,6 +40,8 @@ struct RunRecord {
   double embree_ns_per_ray_min = 0;
   double build_s = 0;            ///< the fastest of build_passes builds (sweep.h: kSweepBuildPasses)
   std::int64_t build_passes = 1;  ///< 1 in data sets written before the column
+  double embree_ns_per_ray_max = 0;  ///< Embree's slowest pass; 0 in data sets before the column
+  double build_s_max = 0;            ///< the slowest build ([build_s, build_s_max]); 0 in data sets before the column
 
   // Counters, per ray, from a separate counted pass.
   double nodes_per_ray = 0, leaves_per_ray = 0, tests_per_ray = 0, hits_per_ray = 0, mailbox_skips_per_ray = 0;

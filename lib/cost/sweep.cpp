@@ -361,6 +361,7 @@ BuiltStructure build_structure(const std::string& accel_spec, const std::shared_
     arena.execute([&] { b.accel = make_accelerator(accel_spec, scene, model_build_context()); });
     const double seconds = seconds_since(start);
     b.build_s = pass == 0 ? seconds : std::min(b.build_s, seconds);
+    b.build_s_max = pass == 0 ? seconds : std::max(b.build_s_max, seconds);
     b.build_passes = pass + 1;
     total += seconds;
   }
@@ -401,7 +402,9 @@ RunRecord measure_case(const SweepCase& c, const Scene& scene, const BuiltStruct
   r.ns_per_ray_median = t.ns_per_ray_median;
   r.ns_per_ray_max = t.ns_per_ray_max;
   r.embree_ns_per_ray_min = t.embree_ns_per_ray_min;
+  r.embree_ns_per_ray_max = t.embree_ns_per_ray_max;
   r.build_s = built.build_s;
+  r.build_s_max = built.build_s_max;
   r.build_passes = built.build_passes;
 
   const TraceResult counted = trace_rays(*built.accel, rays, TraceOptions{timing.threads, true, timing.any_hit});

@@ -114,7 +114,8 @@ ShardSpec parse_shard(const std::string& text);
 /// A structure built for measurement: the accelerator, its build time and its features.
 struct BuiltStructure {
   std::unique_ptr<Aggregate> accel;
-  double build_s = 0;    ///< the fastest of build_passes builds
+  double build_s = 0;      ///< the fastest of build_passes builds
+  double build_s_max = 0;  ///< the slowest ([build_s, build_s_max]: the builds' range)
   int build_passes = 1;
   TreeFeatures features;
 };

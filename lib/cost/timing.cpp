@@ -43,6 +43,7 @@ AlternatingTiming time_alternating(const Primitive& ours, const Primitive* embre
   if (!theirs.empty()) {
     t.embree_ns_per_ray_min = *std::min_element(theirs.begin(), theirs.end()) * per_ray;
     t.embree_ns_per_ray_median = median_of(theirs) * per_ray;
+    t.embree_ns_per_ray_max = *std::max_element(theirs.begin(), theirs.end()) * per_ray;
   }
   return t;
 }

@@ -31,6 +31,7 @@ struct AlternatingTiming {
   double ns_per_ray_max = 0;                         ///< ours, the slowest pass
   double embree_ns_per_ray_min = 0;                  ///< Embree's passes (0 when no Embree was given)
   double embree_ns_per_ray_median = 0;
+  double embree_ns_per_ray_max = 0;                  ///< Embree's slowest pass
 };
 
 /// Times `ours` (and, when not null, `embree`) on `rays`, alternating passes. `rays` must not be empty.

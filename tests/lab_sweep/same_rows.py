@@ -3,8 +3,8 @@ timing columns aside; otherwise name the first difference. Usage: same_rows.py A
 import csv
 import sys
 
-TIMING = {"passes", "ns_per_ray_min", "ns_per_ray_median", "ns_per_ray_max", "embree_ns_per_ray_min", "build_s",
-          "build_passes"}
+TIMING = {"passes", "ns_per_ray_min", "ns_per_ray_median", "ns_per_ray_max", "embree_ns_per_ray_min",
+          "embree_ns_per_ray_max", "build_s", "build_s_max", "build_passes"}
 
 
 def rows(path):
