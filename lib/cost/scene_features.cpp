@@ -1,5 +1,7 @@
 #include "cost/scene_features.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <vector>
 
@@ -7,7 +9,7 @@ namespace raylab {
 
 namespace {
 
-double triangle_area(const TriangleMesh& mesh, std::size_t t) {
+[[gnu::always_inline]] inline double triangle_area(const TriangleMesh& mesh, std::size_t t) {
   const Vec3f a = mesh.vertex(t, 0);
   return 0.5 * static_cast<double>(length(cross(mesh.vertex(t, 1) - a, mesh.vertex(t, 2) - a)));
 }
@@ -18,6 +20,10 @@ struct AreaPass {
   Bounds3f box;
 };
 
+/// Triangles (and vertices) per chunk of the pass: chunks run in parallel, their sums are added in
+/// chunk order, so the features do not depend on the thread count.
+constexpr std::size_t kChunk = 1 << 15;
+
 }  // namespace
 
 SceneFeatures scene_features(const Scene& scene) {
@@ -25,22 +31,32 @@ SceneFeatures scene_features(const Scene& scene) {
   f.primitives = static_cast<double>(scene.primitive_count());
   f.triangles = static_cast<double>(scene.triangle_count());
   const TriangleMesh& mesh = scene.mesh;
-  const std::size_t n = mesh.size();
-  // One pass over the areas: their sum, the largest, and every stride-th one for the median.
+  const std::size_t n = mesh.size(), vertices = mesh.vertices.size();
+  // One pass over the areas (their sum and the largest) and the vertices' box, in chunks.
+  std::vector<AreaPass> chunks((std::max(n, vertices) + kChunk - 1) / kChunk);
+  tbb::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) {
+    AreaPass pass;  // local: stores through chunks[c] would keep the sums out of registers
+    for (std::size_t t = c * kChunk, end = std::min(n, t + kChunk); t < end; ++t) {
+      const double area = triangle_area(mesh, t);
+      pass.total += area;
+      pass.largest = std::max(pass.largest, area);
+    }
+    // TriangleMesh::bounds: holds every triangle.
+    for (std::size_t v = c * kChunk, end = std::min(vertices, v + kChunk); v < end; ++v) pass.box.extend(mesh.vertices[v]);
+    chunks[c] = pass;
+  });
+  AreaPass pass;
+  for (const AreaPass& c : chunks) {
+    pass.total += c.total;
+    pass.largest = std::max(pass.largest, c.largest);
+    pass.box.extend(c.box);
+  }
+  // Every stride-th area for the median.
   const std::size_t stride = std::max<std::size_t>(1, n / kMedianSample);
   std::vector<double> sample;
   sample.reserve(n / stride + 1);
-  AreaPass pass;
-  for (std::size_t t = 0, next = 0; t < n; ++t) {
-    const double area = triangle_area(mesh, t);
-    pass.total += area;
-    pass.largest = std::max(pass.largest, area);
-    if (t == next) {
-      if (area > 0) sample.push_back(area);
-      next += stride;
-    }
-  }
-  for (const Vec3f& v : mesh.vertices) pass.box.extend(v);  // TriangleMesh::bounds: holds every triangle
+  for (std::size_t t = 0; t < n; t += stride)
+    if (const double area = triangle_area(mesh, t); area > 0) sample.push_back(area);
   f.total_area = pass.total;
   f.max_area = pass.largest;
   Bounds3f box = pass.box;

@@ -32,7 +32,8 @@ inline constexpr std::size_t kMedianSample = 8192;
 
 /// The features of `scene`'s flat geometry (instances are not followed: `auto` calls this per
 /// part, on bases and the flat part apart). One O(N) pass (single-precision
-/// areas summed in double); the median by selection in the sample.
+/// areas summed in double), in parallel over fixed chunks whose sums are added in chunk order, so
+/// the result does not depend on the thread count; the median by selection in the sample.
 SceneFeatures scene_features(const Scene& scene);
 
 }  // namespace raylab
