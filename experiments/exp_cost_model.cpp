@@ -145,6 +145,7 @@ class CostModelExperiment {
     md += constants_section();
     md += selection_section();
     md += noise_and_build_section();
+    measure_drift(measured);
     measure_heldout();
     md += prediction_section();
     md += verdict_paragraph(cost_model_verdict(),
@@ -266,6 +267,32 @@ class CostModelExperiment {
       scene_spec_ = spec;
     }
     return scene_;
+  }
+
+  /// The machine's drift between the sweep and the held-out measurements: kDriftAnchors cases of
+  /// the data set `measured` (first measurements, single thread, of scenes up to
+  /// kDriftMaxPrimitives triangles, spread over the case order) measured again just before the
+  /// held-out scenes, as the sweep measured them; each one's fastest pass now over then.
+  void measure_drift(const std::vector<RunRecord>& measured) {
+    std::vector<const RunRecord*> pool;
+    for (const RunRecord& r : measured)
+      if (r.replicate == 0 && r.threads == 1 && r.primitives <= kDriftMaxPrimitives) pool.push_back(&r);
+    const std::size_t anchors = std::min<std::size_t>(kDriftAnchors, pool.size());
+    progress(fmt::format("exp_cost_model: machine drift, {} cases of the data set measured again", anchors));
+    for (std::size_t k = 0; k < anchors; ++k) {
+      const RunRecord& then = *pool[k * pool.size() / anchors];
+      const auto sc = scene(then.scene);
+      const auto embree = make_accelerator("embree", sc);
+      const BuiltStructure built = build_structure(then.accel, sc, 1, kSweepBuildPasses, kSweepBuildSeconds);
+      TimingOptions timing;
+      timing.any_hit = is_any_hit_ray_spec(then.rays);
+      const RunRecord now = measure_case({then.case_number, then.scene, then.accel, then.rays}, *sc, built, *embree,
+                                         make_ray_set(then.rays, sc), timing);
+      drift_cases_.push_back({then, now});
+    }
+    std::vector<double> ratios;
+    for (const auto& [then, now] : drift_cases_) ratios.push_back(now.ns_per_ray_min / then.ns_per_ray_min);
+    if (!ratios.empty()) drift_ = bootstrap_median(ratios);
   }
 
   /// Every candidate of `auto` and the textbook trees on the held-out scenes, measured as the
@@ -502,6 +529,28 @@ class CostModelExperiment {
             pct(q(tree_mape, 0.975)));
       }
     }
+    if (drift_.defined()) {
+      // The held-out times put back on the sweep's machine speed: divided by the drift.
+      std::vector<double> steady = all.measured;
+      for (double& m : steady) m /= drift_.value;
+      counters_mape_without_drift_ = mean_absolute_percentage_error(all.counters, steady);
+      md += fmt::format(
+          "\n**The machine between the sweep and the held-out scenes.** The model is fitted on the sweep's times and "
+          "judged on times measured minutes later, when a shared machine may run at another speed. {} cases of the "
+          "data set (first measurements of scenes up to {:.0e} triangles, spread over the sweep's order) were "
+          "measured again just before the held-out scenes, as the sweep measures; their fastest pass now over then, "
+          "median with its 95% bootstrap interval: **{}** (rows `drift` of cost_model.csv). Every held-out time "
+          "divided by it, the held-out MAPE is {} for the counters model and {} for the tree model: the part of "
+          "the error above that the machine's drift accounts for is the difference.\n",
+          drift_cases_.size(), static_cast<double>(kDriftMaxPrimitives), format_interval(drift_),
+          pct(counters_mape_without_drift_), pct(mean_absolute_percentage_error(all.tree, steady)));
+      for (const auto& [then, now] : drift_cases_)
+        csv_.row("drift", then.family, "", "", 0.0, 0.0, then.scene, then.rays, then.accel, now.ns_per_ray_min, 0.0,
+                 0.0, 0.0, 0.0, now.ns_per_ray_min / then.ns_per_ray_min, 0.0, 0.0, now.ns_per_ray_min,
+                 now.ns_per_ray_max, now.passes);
+      csv_.row("drift", "all", "", "", 0.0, 0.0, "", "", "", 0.0, 0.0, 0.0, 0.0, 0.0, drift_.value, drift_.lo,
+               drift_.hi, 0.0, 0.0, drift_.replicates);
+    }
     // Spearman among the trees of one scene (one ray kind): does the model rank them as measured?
     std::vector<double> rho_tree, rho_80, rho_15;
     for (const auto& [key, s] : by_scene_rays) {
@@ -678,6 +727,9 @@ class CostModelExperiment {
     v.verdict = decide_verdict(v.number, v.threshold);
     v.key = fmt::format("counters held-out MAPE {} [{}, {}] against the goal {}", pct(counters_mape_.value),
                         pct(counters_mape_.lo), pct(counters_mape_.hi), pct(limit));
+    if (drift_.defined())
+      v.key += fmt::format(" (machine drift since the sweep {}; without it {})", format_interval(drift_),
+                           pct(counters_mape_without_drift_));
     v.anchor = "cost-model";
     v.command = fmt::format("build/experiments/exp_cost_model --mode {}", opt_.mode);
     return v;
@@ -869,6 +921,12 @@ class CostModelExperiment {
     double value = NAN, lo = NAN, hi = NAN;
     long scenes = 0;
   } counters_mape_;  ///< heldout_ as measured (thread CPU ns, build seconds), before the fit target
+  /// Cases of the data set measured again before the held-out scenes (measure_drift): then, now.
+  std::vector<std::pair<RunRecord, RunRecord>> drift_cases_;
+  IntervalEstimate drift_;  ///< their time now over then: median and 95% bootstrap interval
+  double counters_mape_without_drift_ = NAN;  ///< the counters model's held-out MAPE, times divided by drift_
+  static constexpr int kDriftAnchors = 16;
+  static constexpr std::int64_t kDriftMaxPrimitives = 100000;
   std::vector<BuilderRow> builder_rows_;
   std::string scene_spec_;
   std::shared_ptr<const Scene> scene_;
