@@ -836,13 +836,15 @@ std::string against_embree(Runner& run, const Options& opt) {
       bvh_bytes = p.ours->stats().bytes;
       embree_bytes = p.theirs->stats().bytes;
       run.row("build", s, ray_kinds[0], "bvh", "", threads, p.ours_s, *p.ours, Trace{}, -1, {}, {}, {}, p.ours_ci);
-      run.row("build", s, ray_kinds[0], "embree", "", threads, p.theirs_s, *p.theirs, Trace{}, -1, {}, {}, {}, p.theirs_ci);
+      run.row("build", s, ray_kinds[0], "embree", "", threads, p.theirs_s, *p.theirs, Trace{}, -1, {}, {}, {},
+              p.theirs_ci);
     }
     {
       const BuildPair p = best_builds("bvh:builder=spatial", "embree:quality=high", scene, 2, repeats);
       sb2 = p.ours_ci;
       eh2 = p.theirs_ci;
-      run.row("build", s, ray_kinds[0], "bvh:builder=spatial", "", 2, p.ours_s, *p.ours, Trace{}, -1, {}, {}, {}, p.ours_ci);
+      run.row("build", s, ray_kinds[0], "bvh:builder=spatial", "", 2, p.ours_s, *p.ours, Trace{}, -1, {}, {}, {},
+              p.ours_ci);
       run.row("build", s, ray_kinds[0], "embree:quality=high", "", 2, p.theirs_s, *p.theirs, Trace{}, -1, {}, {}, {},
               p.theirs_ci);
     }

@@ -541,8 +541,8 @@ int main(int argc, char** argv) {
           TraceCost& c = costs[a];
           const IntervalEstimate ns = t.ns_per_ray(i), over = t.ratio(i, e), embree = t.ns_per_ray(e);
           c.ns = ns.value;
-          teapot_csv.row(ratio, spec, a, teapot_rays.size(), c.ops(), c.tests, c.nodes, c.ns, embree.value, ns.lo, ns.hi,
-                         over.value, over.lo, over.hi, t.rounds(), embree.lo, embree.hi);
+          teapot_csv.row(ratio, spec, a, teapot_rays.size(), c.ops(), c.tests, c.nodes, c.ns, embree.value, ns.lo,
+                         ns.hi, over.value, over.lo, over.hi, t.rounds(), embree.lo, embree.hi);
           at[a][ratio] = c;
           over_embree[a][ratio] = over;
           if (i == e) embree_ns[ratio] = ns;

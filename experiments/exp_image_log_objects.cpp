@@ -454,7 +454,8 @@ int main(int argc, char** argv) {
           "powers c·N^α: straight lines on log axes are powers, not logarithms.*\n\n";
     md += fmt::format("Data: image_log_objects.csv (ns_per_ray: the median of the rounds, with its 95% bootstrap "
                       "interval ns_per_ray_lo..hi and the round count; embree_ns_per_ray and its interval "
-                      "embree_ns_per_ray_lo..hi repeat the embree row's), fits: image_log_objects_fits.csv. Measured by "
+                      "embree_ns_per_ray_lo..hi repeat the embree row's), fits: image_log_objects_fits.csv. "
+                      "Measured by "
                       "`build/experiments/exp_image_log_objects --mode {}` (run by `./lab report`). {}.\n",
                       opt.mode, provenance());
     std::ofstream(opt.out + "/image_log_objects.md") << md;

@@ -291,8 +291,8 @@ int main(int argc, char** argv) {
         nf.row(spec, valid.size(), a.value, b.value, m.value, bi.value, mi.value, hits, a.lo, a.hi, bi.lo, bi.hi, mi.lo,
                mi.hi, rounds, b.lo, b.hi, m.lo, m.hi);
         md += fmt::format("| `{}` | {} | {} | {} | {} | {} | {} | {} |\n", spec, format_interval(a, 3),
-                          format_interval(b, 3), format_interval(m, 3), format_interval(bi), format_interval(mi), rounds,
-                          hits);
+                          format_interval(b, 3), format_interval(m, 3), format_interval(bi), format_interval(mi),
+                          rounds, hits);
       }
     }
 

@@ -34,7 +34,8 @@ struct Measured {
   std::size_t triangles = 0;
   double build_s = 0, ns = 0, embree_ns = 0, nodes_per_ray = 0, leaves_per_ray = 0, tests_per_ray = 0;
   AccelStats stats;
-  IntervalEstimate ns_ci, embree_ci, ratio_ci;  ///< medians over the replicate rounds with 95% bootstrap intervals (ratio: Embree's over ours)
+  /// Medians over the replicate rounds with 95% bootstrap intervals (ratio: Embree's time over ours).
+  IntervalEstimate ns_ci, embree_ci, ratio_ci;
   IntervalEstimate build_ci;         ///< build seconds: the median over kBuildRounds builds with its interval
   std::vector<double> ratios;        ///< Embree's time over ours, one per replicate round
   /// Throughput relative to Embree: the median per-round ratio when replicated, else the ratio of the times.
@@ -211,8 +212,8 @@ class Runner {
     for (std::size_t i = 0; i < specs.size(); ++i) {
       const IntervalEstimate e = bootstrap_median(b.seconds[i]);
       csv_.row("goal_build", scene_spec, s->mesh.size(), "", 0, specs[i].first, specs[i].second, e.value, stats[i].nodes,
-               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, e.lo, e.hi, rounds, 0.0,
-               0.0);
+               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, e.lo, e.hi, rounds,
+               0.0, 0.0);
     }
     return b;
   }

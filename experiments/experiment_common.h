@@ -291,7 +291,8 @@ inline double thread_cpu_seconds_of(const std::function<void()>& f) {
 /// otherwise, before anything of the row is written).
 class CsvWriter {
  public:
-  CsvWriter(const std::string& path, const std::vector<std::string>& columns) : out_(path), path_(path), columns_(columns.size()) {
+  CsvWriter(const std::string& path, const std::vector<std::string>& columns)
+      : out_(path), path_(path), columns_(columns.size()) {
     if (!out_) throw InputError("cannot write " + path);
     for (std::size_t i = 0; i < columns.size(); ++i) out_ << (i ? "," : "") << columns[i];
     out_ << "\n";

@@ -42,7 +42,8 @@ SceneFeatures scene_features(const Scene& scene) {
       pass.largest = std::max(pass.largest, area);
     }
     // TriangleMesh::bounds: holds every triangle.
-    for (std::size_t v = c * kChunk, end = std::min(vertices, v + kChunk); v < end; ++v) pass.box.extend(mesh.vertices[v]);
+    for (std::size_t v = c * kChunk, end = std::min(vertices, v + kChunk); v < end; ++v)
+      pass.box.extend(mesh.vertices[v]);
     chunks[c] = pass;
   });
   AreaPass pass;
