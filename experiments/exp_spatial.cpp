@@ -176,10 +176,12 @@ class Runner {
         return t;
       });
     auto seconds = alternate_rounds(builds, rounds);
-    for (std::size_t i = 0; i < accel_specs.size(); ++i)
-      csv_.row(part, scene_spec, s->mesh.size(), "", 0, accel_specs[i], params[i], median(seconds[i]), stats[i].nodes,
-               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-               bootstrap_median(seconds[i]).lo, bootstrap_median(seconds[i]).hi, rounds, 0.0, 0.0);
+    for (std::size_t i = 0; i < accel_specs.size(); ++i) {
+      const IntervalEstimate build = bootstrap_median(seconds[i]);
+      csv_.row(part, scene_spec, s->mesh.size(), "", 0, accel_specs[i], params[i], build.value, stats[i].nodes,
+               stats[i].bytes, stats[i].sah_cost, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, build.lo, build.hi,
+               rounds, 0.0, 0.0);
+    }
     return seconds;
   }
 

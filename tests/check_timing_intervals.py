@@ -61,7 +61,7 @@ def faults_of(path):
         header = next(csv.reader(f), [])
     columns = set(header)
     exempt = NOT_MEASURED.get(path.name, {})
-    interval_ends = {c for c in header if re.search(r"(_lo|_hi|_ci95_lo|_ci95_hi|_lo_s|_hi_s)$", c)}
+    interval_ends = {c for c in header if re.search(r"_(lo|hi)(_s)?$", c)}
     timings = [c for c in header if TIMING.search(c) and c not in exempt and c not in interval_ends]
     faults = [f"{path}: {c}: a timing column without its interval (X_lo/X_hi, or the passes' X_min/X_max)"
               for c in timings if interval_of(c, columns, FASTEST_OF_PASSES.get(path.name, ())) is None]
