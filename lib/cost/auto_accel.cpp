@@ -82,14 +82,15 @@ struct RaySample {
 };
 
 /// `sample_rays` rays of the choice's kind (split evenly over the kinds of `mixed`), generated
-/// once per race: a diffuse or shadow ray set builds a tracer of its own (ray_sets.h).
+/// once per race; diffuse and shadow rays start where `first_hits`, the race's first structure,
+/// finds the visible surface (ray_sets.h), so that sampling builds nothing more.
 std::vector<RaySample> race_sample(const std::shared_ptr<const Scene>& scene, const std::string& rays,
-                                   std::size_t sample_rays) {
+                                   std::size_t sample_rays, const Aggregate& first_hits) {
   const std::vector<std::string> kinds = rays == "mixed" ? kMixedKinds : std::vector<std::string>{rays};
   std::vector<RaySample> sample;
   for (const std::string& kind : kinds) {
     const std::string spec = kind + ":" + std::to_string(sample_rays / kinds.size());
-    sample.push_back({make_ray_set(spec, scene), is_any_hit_ray_spec(spec)});
+    sample.push_back({make_ray_set(spec, scene, first_hits), is_any_hit_ray_spec(spec)});
   }
   return sample;
 }
@@ -279,7 +280,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
       auto measured_total = [&](std::size_t k) {
         return objective(candidates[k].measured_build_s, candidates[k].measured_ns_per_ray, choice.count);
       };
-      const std::vector<RaySample> rays = race_sample(scene, choice.rays, sample);
+      const std::vector<RaySample> rays = race_sample(scene, choice.rays, sample, *best);
       candidates[best_k].measured_ns_per_ray = sampled_ns_per_ray(*best, rays);
       std::size_t raced = 1;
       for (const std::size_t k : racers) {

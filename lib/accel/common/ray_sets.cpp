@@ -18,6 +18,17 @@ std::vector<Ray> make_ray_set(const std::string& spec, const std::shared_ptr<con
   return generate_rays(spec, *scene, first_hit);
 }
 
+std::vector<Ray> make_ray_set(const std::string& spec, const std::shared_ptr<const Scene>& scene,
+                              const Primitive& first_hits) {
+  const FirstHitFunction first_hit = [&](const Ray& r) {
+    Ray ray = r;
+    Hit hit;
+    first_hits.intersect(ray, hit);
+    return hit;
+  };
+  return generate_rays(spec, *scene, first_hit);
+}
+
 bool is_any_hit_ray_spec(const std::string& spec) {
   const std::string name = parse_spec(spec).name;
   return name == "shadow" || name == "ao";
