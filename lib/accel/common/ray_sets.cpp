@@ -5,28 +5,29 @@
 #include "rays/ray_generators.h"
 
 namespace raylab {
+namespace {
+
+Hit first_hit_of(const Primitive& tracer, const Ray& r) {
+  Ray ray = r;
+  Hit hit;
+  tracer.intersect(ray, hit);
+  return hit;
+}
+
+}  // namespace
 
 std::vector<Ray> make_ray_set(const std::string& spec, const std::shared_ptr<const Scene>& scene) {
   std::shared_ptr<Aggregate> tracer;  // built on first use: primary/lines/edges need none
-  FirstHitFunction first_hit = [&](const Ray& r) {
+  const FirstHitFunction first_hit = [&](const Ray& r) {
     if (!tracer) tracer = make_accelerator("embree-robust", scene);
-    Ray ray = r;
-    Hit hit;
-    tracer->intersect(ray, hit);
-    return hit;
+    return first_hit_of(*tracer, r);
   };
   return generate_rays(spec, *scene, first_hit);
 }
 
 std::vector<Ray> make_ray_set(const std::string& spec, const std::shared_ptr<const Scene>& scene,
                               const Primitive& first_hits) {
-  const FirstHitFunction first_hit = [&](const Ray& r) {
-    Ray ray = r;
-    Hit hit;
-    first_hits.intersect(ray, hit);
-    return hit;
-  };
-  return generate_rays(spec, *scene, first_hit);
+  return generate_rays(spec, *scene, [&](const Ray& r) { return first_hit_of(first_hits, r); });
 }
 
 bool is_any_hit_ray_spec(const std::string& spec) {
