@@ -99,7 +99,7 @@ std::string certified_ratio_table(const Options& opt) {
   std::string md = fmt::format(
       "\nCertified against watertight on meshes no test uses, one near the origin and one far from it "
       "(issue 31): single-thread time per ray of every structure with `kernel=certified` over the same "
-      "structure with the watertight kernel, {} rays of each kind ({} for the grids), in one process, runs alternated {} times. "
+      "structure with the watertight kernel, {} rays of each kind, in one process, runs alternated {} times. "
       "Times are medians over the rounds and the ratio the median of the per-round ratios, each with its 95% "
       "bootstrap interval. *float only*, *interval*, *exact*: the shares of rays "
       "the certified kernel decided by its static filters alone (in float, and the plane's determinants in "
@@ -108,23 +108,19 @@ std::string certified_ratio_table(const Options& opt) {
       "trace`). Goal of issue 31: certified / watertight <= 1.10 everywhere.\n\n"
       "| scene | structure | rays | watertight ns/ray [95%] | certified ns/ray [95%] | certified / watertight [95%] | "
       "float only | interval | exact |\n|---|---|---|---|---|---|---|---|---|\n",
-      n, n / 20, reps);
+      n, reps);
   RatioGoal goal(1.10, /*at_most=*/true);
   for (const auto& scene_spec : scene_specs) {
     const std::shared_ptr<const Scene> scene = scene_or_skip(scene_spec);
     if (!scene) continue;
-    // The grids get a twentieth of the rays: far from the origin their cell intervals widen with
-    // |o| (cell_widening) and a ray costs tens of microseconds in either kernel.
-    std::vector<std::pair<std::string, std::vector<Ray>>> ray_sets, grid_ray_sets;
-    for (const std::string kind : {"primary", "diffuse", "shadow"}) {
+    std::vector<std::pair<std::string, std::vector<Ray>>> ray_sets;
+    for (const std::string kind : {"primary", "diffuse", "shadow"})
       ray_sets.emplace_back(kind, make_ray_set(kind + ":" + std::to_string(n), scene));
-      grid_ray_sets.emplace_back(kind, make_ray_set(kind + ":" + std::to_string(n / 20), scene));
-    }
     for (const auto& base : structures) {
       progress(fmt::format("certainty: certified against watertight, {} {}", scene_spec, base));
       const auto wt = make_accelerator(with_param(base, "kernel=watertight"), scene),
                  cert = make_accelerator(with_param(base, "kernel=certified"), scene);
-      for (const auto& [kind, rays] : base.find("grid") != std::string::npos ? grid_ray_sets : ray_sets) {
+      for (const auto& [kind, rays] : ray_sets) {
         const bool any_hit = kind == "shadow";
         const TraceOptions timed{1, false, any_hit};
         const double count = static_cast<double>(rays.size());

@@ -760,6 +760,8 @@ int main(int argc, char** argv) {
             bool uniform = false, first = true;  // uniform: a UniformGrid (the floors apply to it)
             CellSequence seq;
             GridGeometry geometry;
+            float margin = 0.0f;
+            const GridFrame frame = make_grid_frame(c.scene);  // the scene the grid placed
             const auto build_once = [&] {
               std::unique_ptr<Aggregate> grid;
               const double s = thread_cpu_seconds_of([&] { grid = make_accelerator(spec, c.scene); });
@@ -772,6 +774,7 @@ int main(int argc, char** argv) {
                   refs = static_cast<double>(u->cells().refs.size());
                   seq = cell_sequence(u->cells(), std::size_t(u->geometry().res[0]));
                   geometry = u->geometry();
+                  margin = u->margin();
                 }
               }
               return s;
@@ -783,7 +786,7 @@ int main(int argc, char** argv) {
               if (!uniform) return 0.0;
               return thread_cpu_seconds_of([&] {
                 const std::size_t found =
-                    count_placed_references(*c.scene, geometry, placement, grid_margin(c.scene->bounds()));
+                    count_placed_references(*frame.scene, geometry, placement, margin);
                 if (found != static_cast<std::size_t>(refs))
                   throw std::logic_error("exp_grids: cells found != cells placed");
               });

@@ -76,7 +76,9 @@ void expect_agrees_with_oracle(const std::string& scene_spec, std::shared_ptr<co
                                const std::string& reference = "exact") {
   const auto oracle = make_accelerator(reference, scene);
   const auto layout = make_accelerator("grid", scene);
-  const auto rays = edge_case_rays(dynamic_cast<const UniformGrid&>(*layout).geometry(), 7);
+  const auto& grid = dynamic_cast<const UniformGrid&>(*layout);
+  auto rays = edge_case_rays(grid.geometry(), 7);  // in the grid's frame (grid_frame.h): moved to the world
+  for (Ray& r : rays) r.org = r.org + grid.frame_origin();
   const double diagonal = length(Vec3d(scene->bounds().diagonal()));
   const TraceResult exact = trace_rays(*oracle, rays, TraceOptions{1, false, false});
   const TraceResult exact_any = trace_rays(*oracle, rays, TraceOptions{1, false, true});
@@ -96,7 +98,8 @@ void expect_agrees_with_oracle(const std::string& scene_spec, std::shared_ptr<co
 }
 
 TEST(GridDda, RaysAlongCellFacesAndEdgesAndFromInsideAgreeWithTheOracle) {
-  for (const std::string spec : {"soup:n=2000", "walls:n=6,angle=0", "sphereflake:depth=2"})
+  for (const std::string spec : {"soup:n=2000", "walls:n=6,angle=0", "sphereflake:depth=2",
+                                 "transformed:of=(soup:n=2000),translate=3e4:-1e4:2e4"})
     expect_agrees_with_oracle(spec, make_scene(spec));
 }
 
@@ -267,6 +270,32 @@ TEST(GridBuild, NestedGridRefinesTheCrowdedCellsOfTheStadium) {
   NestedGridConfig two;
   two.mode = NestedGridMode::two_level;
   EXPECT_GT(NestedGrid(scene, two).level_count(), 1u);
+}
+
+// A scene far from the world origin is placed and walked in a frame near it (grid_frame.h): the
+// frame's translation is exact, and its grids hold about as many references as the same scene's
+// at the origin. In the world frame the placement margin, 2^-16 of the coordinates' magnitude,
+// spread every triangle of this soup over hundreds of cells. A scene near the origin keeps the
+// world frame.
+TEST(GridFrame, AFarSceneIsPlacedAsTightlyAsTheSameSceneAtTheOrigin) {
+  const auto near = make_scene("soup:n=3000");
+  const auto far = make_scene("transformed:of=(soup:n=3000),translate=3e4:-1e4:2e4");
+  const GridFrame near_frame = make_grid_frame(near);
+  EXPECT_TRUE(near_frame.is_world());
+  EXPECT_EQ(near_frame.scene, near);
+  const GridFrame frame = make_grid_frame(far);
+  ASSERT_FALSE(frame.is_world());
+  ASSERT_EQ(frame.scene->mesh.vertices.size(), far->mesh.vertices.size());
+  for (std::size_t i = 0; i < far->mesh.vertices.size(); ++i)
+    ASSERT_TRUE(frame.scene->mesh.vertices[i] + frame.origin == far->mesh.vertices[i]) << "vertex " << i;
+  EXPECT_LT(4.0f * grid_margin(frame.scene->bounds()), grid_margin(far->bounds()));
+  for (const std::string spec : {"grid", "grid:place=exact", "nested-grid"}) {
+    const double near_bytes = double(make_accelerator(spec, near)->stats().bytes),
+                 far_bytes = double(make_accelerator(spec, far)->stats().bytes);
+    EXPECT_LT(far_bytes, 1.25 * near_bytes) << spec;
+  }
+  const auto grid = make_accelerator("grid", far);
+  EXPECT_TRUE(dynamic_cast<const UniformGrid&>(*grid).frame_origin() == frame.origin);
 }
 
 TEST(GridParams, BadParametersAreInputErrors) {

@@ -18,7 +18,9 @@
 namespace raylab {
 
 /// The t-widening w of a ray's cell intervals: 2^-16 · (|o|∞ + D) / |d|∞ for a grid of diagonal
-/// extent D. It covers the rounding of the kernel's t and of the DDA's crossings, and stays far
+/// extent D, with o the ray's origin in the grid's frame (grid_frame.h). It covers the rounding
+/// of the DDA's crossings (computed in the frame) and of the kernel's t (whose terms scale with
+/// |v - o| <= |o|∞ + D for a vertex v in the grid, the same in either frame), and stays far
 /// below hit_comparison.h's tolerance (1e-4 of the same scale), so a hit accepted up to w beyond
 /// its cell is at most a tie with any closer hit in the next cell.
 inline float cell_widening(const Ray& ray, float grid_extent) {
@@ -201,17 +203,18 @@ struct AnyHitInCells {
 };
 
 /// The grid's part of a closest-hit query shared by the uniform and the nested grid: `walk(state)`
-/// runs the 3D-DDA over the ray's clipped interval (ending at t1) with a ClosestHitInCells state;
-/// with the certified kernel, a ray whose DDA could leave the placement margin `margin` of the
-/// grid box `box` (dda_within_margin) is offered every primitive instead. On a hit, writes `hit`
-/// and sets ray.tmax to its t.
+/// runs the 3D-DDA of `local` (the ray in the grid's frame, grid_frame.h) over its clipped
+/// interval (ending at t1) with a ClosestHitInCells state, whose kernel tests `ray`; with the
+/// certified kernel, a ray whose DDA could leave the placement margin `margin` of the grid box
+/// `box` (dda_within_margin, in the frame) is offered every primitive instead. On a hit, writes
+/// `hit` and sets ray.tmax to its t.
 template <class Kernel, class Counters, bool kMailbox, class Walk>
-inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, float t1,
-                                const Bounds3f& box, float margin, GridAcceptance acceptance, float extent,
+inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, const Ray& local,
+                                float t1, const Bounds3f& box, float margin, GridAcceptance acceptance, float extent,
                                 Counters& counters, Walk&& walk) {
   bool found;
-  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(ray, t1, box, margin)) {
-    ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(ray, extent),
+  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(local, t1, box, margin)) {
+    ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(local, extent),
                                                         counters);
     walk(state);
     found = state.found;
@@ -224,11 +227,11 @@ inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, R
 }
 
 /// The any-hit counterpart of closest_hit_in_grid: `walk(state)` with an AnyHitInCells state,
-/// returning whether it found a hit; `ray` is any_hit_ray of the query.
+/// returning whether it found a hit; `ray` is any_hit_ray of the query, `local` the same in the frame.
 template <class Kernel, class Counters, bool kMailbox, class Walk>
-inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, float t1,
+inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, const Ray& local, float t1,
                             const Bounds3f& box, float margin, Counters& counters, Walk&& walk) {
-  if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(ray, t1, box, margin)) {
+  if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(local, t1, box, margin)) {
     Hit hit;
     return certified_over_all_primitives<true>(scene, ray, hit, counters);
   }

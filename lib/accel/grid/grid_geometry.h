@@ -52,7 +52,8 @@ struct GridGeometry {
 /// The placement margin δ of a scene with bounds `b`: 2^-16 of (its largest coordinate magnitude
 /// + its largest extent). Cells are widened by δ when primitives are placed, so that a point the
 /// 3D-DDA attributes to a cell by float rounding (a few ulps of the coordinates) lies in that
-/// cell's primitives' region; grids are built on the scene box widened by δ.
+/// cell's primitives' region; grids are built on the scene box widened by δ. The grids take the
+/// bounds of the scene in their frame (grid_frame.h), whose coordinates are at most a few extents.
 inline float grid_margin(const Bounds3f& b) {
   const float mag = std::max(max_component(abs(b.lo)), max_component(abs(b.hi)));
   return std::max(kGridMarginScale * (mag + max_component(b.diagonal())), 1e-30f);
@@ -67,8 +68,9 @@ inline float grid_margin(const Bounds3f& b) {
 /// 3u(|plane| + |o|) along its axis), and the two ways planes are computed (cell_of for bbox
 /// placement, plane() for exact placement and the DDA: about 10u|box|). The test asks for
 /// twice that, half the margin, which leaves room for the nested grids' clipped intervals.
-/// False for a ray from far outside (|o| much larger than the scene): grids then offer it every
-/// primitive (certified_over_all_primitives).
+/// All in the grid's frame (grid_frame.h): `ray` is the ray in the frame, `box` and `margin` the
+/// frame's. False for a ray from far outside (|o| much larger than the scene): grids then offer it
+/// every primitive (certified_over_all_primitives).
 inline bool dda_within_margin(const Ray& ray, float t1, const Bounds3f& box, float margin) {
   const float mag = std::max(max_component(abs(box.lo)), max_component(abs(box.hi)));
   const float reach = max_component(abs(ray.org)) + std::abs(t1) * max_component(abs(ray.dir)) + mag;

@@ -11,6 +11,7 @@
 
 #include "accel/grid/cell_intersector.h"
 #include "accel/grid/grid_config.h"
+#include "accel/grid/grid_frame.h"
 #include "accel/grid/grid_geometry.h"
 #include "accel/grid/grid_placement.h"
 #include "accel/grid/grid_traversal.h"
@@ -30,7 +31,11 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   std::optional<std::uint64_t> structure_hash() const override;
   Bounds3f bounds() const override { return bounds_; }
 
+  /// The grid's geometry, in its frame (grid_frame.h): scene coordinates minus frame_origin().
   const GridGeometry& geometry() const { return grid_; }
+  const Vec3f& frame_origin() const { return origin_; }
+  /// The placement margin of the grid's cells (grid_margin of the scene in the frame).
+  float margin() const { return margin_; }
   /// The cell lists; their references are local ids of triangles() when it is not empty.
   const CellLists& cells() const { return lists_; }
   const CellTriangles& triangles() const { return tris_; }
@@ -57,30 +62,33 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
  private:
   template <class Kernel, class Counters, bool kMailbox>
   bool closest(Ray& ray, Hit& hit, Counters& counters) const {
+    const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
-    if (!intersect_box(grid_.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    if (!intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
     return closest_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, hit, t1, grid_.box, margin_, config_.acceptance, extent_, counters,
-        [&](auto& state) { return walk(ray, inv, t0, t1, state, counters); });
+        *scene_, tris_, ray, hit, local, t1, grid_.box, margin_, config_.acceptance, extent_, counters,
+        [&](auto& state) { return walk(local, inv, t0, t1, state, counters); });
   }
 
   template <class Kernel, class Counters, bool kMailbox>
   bool any(const Ray& query, Counters& counters) const {
     const Ray ray = any_hit_ray<Kernel>(query);
+    const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
-    if (!intersect_box(grid_.box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, t1, grid_.box, margin_, counters,
-                                                       [&](auto& state) { return walk(ray, inv, t0, t1, state, counters); });
+    if (!intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, local, t1, grid_.box, margin_, counters,
+                                                       [&](auto& state) { return walk(local, inv, t0, t1, state, counters); });
   }
 
-  /// The 3D-DDA over [t0, t1], offering each non-empty cell to `state`; true when `state` stopped it.
+  /// The 3D-DDA of `local` (the ray in the grid's frame) over [t0, t1], offering each non-empty
+  /// cell to `state`; true when `state` stopped it.
   template <class State, class Counters>
-  bool walk(const Ray& ray, const Vec3f& inv, float t0, float t1, State& state, Counters& counters) const {
+  bool walk(const Ray& local, const Vec3f& inv, float t0, float t1, State& state, Counters& counters) const {
     const std::uint32_t* refs = lists_.refs.data();
     const std::uint32_t* offsets = lists_.offsets.data();
-    return grid_dda(grid_, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
+    return grid_dda(grid_, local.org, local.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
       counters.node();
       const std::uint32_t b = offsets[c], e = offsets[c + 1];
       return b != e && state.leaf(refs + b, refs + e, enter, exit);
@@ -90,8 +98,9 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   std::shared_ptr<const Scene> scene_;
   GridConfig config_;
   Bounds3f bounds_;
+  Vec3f origin_{0.0f};  ///< the frame's origin (grid_frame.h); grid_ is in the frame
   GridGeometry grid_;
-  float margin_ = 0.0f;  ///< the placement margin (grid_margin)
+  float margin_ = 0.0f;  ///< the placement margin (grid_margin of the scene in the frame)
   float extent_ = 0.0f;  ///< sum of the grid's extents, the D of cell_widening
   CellLists lists_;
   CellTriangles tris_;

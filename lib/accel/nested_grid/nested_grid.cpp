@@ -36,14 +36,17 @@ NestedGridConfig read_nested_grid_config(SpecReader& r) {
 NestedGrid::NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfig& config)
     : scene_(std::move(scene)), config_(config), bounds_(scene_->bounds()) {
   if (scene_->instanced()) throw InputError("nested-grid: scene '" + scene_->spec + "' is instanced twice over");
-  margin_ = grid_margin(bounds_);
-  const Bounds3f box = widened(bounds_, margin_);
+  const GridFrame frame = make_grid_frame(scene_);
+  origin_ = frame.origin;
+  const Scene& placed = *frame.scene;
+  margin_ = grid_margin(placed.bounds());
+  const Bounds3f box = widened(placed.bounds(), margin_);
   const Vec3f d = box.diagonal();
   extent_ = d.x + d.y + d.z;
   std::vector<std::uint32_t> all(scene_->primitive_count());
   std::iota(all.begin(), all.end(), 0u);
   std::vector<CellLists> lists;
-  build_level(all.data(), all.size(), box, 0, lists);
+  build_level(placed, all.data(), all.size(), box, 0, lists);
   // The leaf lists of every level gathered into one exactly sized array, each reference written
   // once (no reallocation while levels are built).
   std::size_t total = 0;
@@ -66,14 +69,14 @@ NestedGrid::NestedGrid(std::shared_ptr<const Scene> scene, const NestedGridConfi
   tris_ = renumber_cell_triangles(*scene_, refs_.data(), refs_.size());
 }
 
-std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level,
-                                      std::vector<CellLists>& level_lists) {
+std::uint32_t NestedGrid::build_level(const Scene& placed, const std::uint32_t* prims, std::size_t n,
+                                      const Bounds3f& box, int level, std::vector<CellLists>& level_lists) {
   const bool two_level = config_.mode == NestedGridMode::two_level;
   const double density =
       level > 0 ? config_.sub_density : (two_level ? config_.top_density : config_.cells.density);
   const GridGeometry geom(box, grid_resolution(box, static_cast<double>(n), density, config_.cells.max_cells));
   if (level > 0 && static_cast<double>(cells_.size() + geom.cell_count()) > cell_budget_) return kChild;
-  CellLists lists = place_primitives(*scene_, prims, n, geom, config_.cells.placement, margin_);
+  CellLists lists = place_primitives(placed, prims, n, geom, config_.cells.placement, margin_);
   if (level > 0) {
     // A refinement is futile when its cells see, on average, more than half of the parent cell's
     // primitives (long or crowded primitives spanning the whole cell): the caller keeps a leaf.
@@ -99,11 +102,11 @@ std::uint32_t NestedGrid::build_level(const std::uint32_t* prims, std::size_t n,
         const std::uint32_t b = lists.offsets[c], cnt = lists.count(c);
         if (level < max_level && cnt > refine_above) {
           Bounds3f content;
-          for (std::uint32_t r = b; r < b + cnt; ++r) content.extend(scene_->primitive_bounds(lists.refs[r]));
+          for (std::uint32_t r = b; r < b + cnt; ++r) content.extend(placed.primitive_bounds(lists.refs[r]));
           const Bounds3f child_box = widened(raylab::intersect(widened(geom.cell_box(i, j, k), margin_), content), margin_);
           const auto res = grid_resolution(child_box, cnt, config_.sub_density, config_.cells.max_cells);
           if (!child_box.empty() && std::size_t(res[0]) * res[1] * res[2] > 1) {
-            const std::uint32_t child = build_level(lists.refs.data() + b, cnt, child_box, level + 1, level_lists);
+            const std::uint32_t child = build_level(placed, lists.refs.data() + b, cnt, child_box, level + 1, level_lists);
             if (child != kChild) {
               cells_[base + c] = {child, kChild};
               continue;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "accel/grid/cell_intersector.h"
+#include "accel/grid/grid_frame.h"
 #include "accel/grid/grid_placement.h"
 #include "accel/grid/grid_geometry.h"
 #include "accel/grid/grid_traversal.h"
@@ -33,9 +34,11 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   }
   Bounds3f bounds() const override { return bounds_; }
   std::size_t level_count() const { return levels_.size(); }
+  const Vec3f& frame_origin() const { return origin_; }
 
-  /// Calls f(box, count, refined) for every cell of every level: its box, its primitive count
-  /// (0 for a refined cell) and whether a grid of the next level refines it.
+  /// Calls f(box, count, refined) for every cell of every level: its box in the grid's frame
+  /// (grid_frame.h: scene coordinates minus frame_origin()), its primitive count (0 for a refined
+  /// cell) and whether a grid of the next level refines it.
   template <class F>
   void for_each_cell(F&& f) const {
     for (const Level& level : levels_)
@@ -77,23 +80,25 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     std::size_t cell_base = 0;
   };
 
-  /// Builds the grid of one level over `prims` in `box` and returns its index in levels_, or
-  /// kChild when a refinement (level > 0) would be futile. The level's cell lists go to
-  /// lists[index], and a leaf cell's begin indexes them until the build gathers them into refs_.
-  std::uint32_t build_level(const std::uint32_t* prims, std::size_t n, const Bounds3f& box, int level,
-                            std::vector<CellLists>& lists);
+  /// Builds the grid of one level over `prims` of `placed` (the scene in the grid's frame) in
+  /// `box` and returns its index in levels_, or kChild when a refinement (level > 0) would be
+  /// futile. The level's cell lists go to lists[index], and a leaf cell's begin indexes them until
+  /// the build gathers them into refs_.
+  std::uint32_t build_level(const Scene& placed, const std::uint32_t* prims, std::size_t n, const Bounds3f& box,
+                            int level, std::vector<CellLists>& lists);
 
+  /// The 3D-DDA of `local` (the ray in the grid's frame) through level gi over [t0, t1].
   template <class Counters, class State>
-  bool traverse(std::uint32_t gi, const Ray& ray, const Vec3f& inv, float t0, float t1, State& state,
+  bool traverse(std::uint32_t gi, const Ray& local, const Vec3f& inv, float t0, float t1, State& state,
                 Counters& counters) const {
     const Level& L = levels_[gi];
-    return grid_dda(L.geom, ray.org, ray.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
+    return grid_dda(L.geom, local.org, local.dir, inv, t0, t1, [&](std::uint32_t c, float enter, float exit) {
       counters.node();
       const Cell cell = cells_[L.cell_base + c];
       if (cell.count == kChild) {
         float c0, c1;
-        if (!intersect_box(levels_[cell.begin].geom.box, ray, inv, enter, exit, c0, c1)) return false;
-        return traverse(cell.begin, ray, inv, c0, c1, state, counters);
+        if (!intersect_box(levels_[cell.begin].geom.box, local, inv, enter, exit, c0, c1)) return false;
+        return traverse(cell.begin, local, inv, c0, c1, state, counters);
       }
       return cell.count != 0 && state.leaf(refs_.data() + cell.begin, refs_.data() + cell.begin + cell.count, enter, exit);
     });
@@ -101,30 +106,33 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
 
   template <class Kernel, class Counters, bool kMailbox>
   bool closest(Ray& ray, Hit& hit, Counters& counters) const {
+    const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
     const Bounds3f& box = levels_[0].geom.box;
     float t0, t1;
-    if (!intersect_box(box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    if (!intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
     return closest_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, hit, t1, box, margin_, config_.cells.acceptance, extent_, counters,
-        [&](auto& state) { return traverse(0, ray, inv, t0, t1, state, counters); });
+        *scene_, tris_, ray, hit, local, t1, box, margin_, config_.cells.acceptance, extent_, counters,
+        [&](auto& state) { return traverse(0, local, inv, t0, t1, state, counters); });
   }
 
   template <class Kernel, class Counters, bool kMailbox>
   bool any(const Ray& query, Counters& counters) const {
     const Ray ray = any_hit_ray<Kernel>(query);
+    const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
     const Bounds3f& box = levels_[0].geom.box;
     float t0, t1;
-    if (!intersect_box(box, ray, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, t1, box, margin_, counters,
-                                                       [&](auto& state) { return traverse(0, ray, inv, t0, t1, state, counters); });
+    if (!intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, local, t1, box, margin_, counters,
+                                                       [&](auto& state) { return traverse(0, local, inv, t0, t1, state, counters); });
   }
 
   std::shared_ptr<const Scene> scene_;
   NestedGridConfig config_;
   Bounds3f bounds_;
-  float margin_ = 0.0f;
+  Vec3f origin_{0.0f};  ///< the frame's origin (grid_frame.h); every level's geometry is in the frame
+  float margin_ = 0.0f;  ///< the placement margin (grid_margin of the scene in the frame)
   float extent_ = 0.0f;
   double cell_budget_ = 0.0;   ///< see NestedGridConfig::cells_per_primitive_budget
   std::vector<Level> levels_;  ///< levels_[0] is the top grid
