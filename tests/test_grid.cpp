@@ -272,6 +272,44 @@ TEST(GridBuild, NestedGridRefinesTheCrowdedCellsOfTheStadium) {
   EXPECT_GT(NestedGrid(scene, two).level_count(), 1u);
 }
 
+// A ray from thousands of grid extents away rounds its 3D-DDA to the ulps of its origin, beyond the
+// placement margin; the certified grids walk it from where it enters the grid (EntryRay,
+// grid_geometry.h). Both ways round (a camera far from a scene at the origin, and a camera at the
+// origin looking at a scene far from it), their first hits are the oracle's by the exact rule, and
+// they test a few triangles per ray, where offering every primitive tested hundreds.
+TEST(GridDda, RaysFromFarAwayAreWalkedFromWhereTheyEnterTheGrid) {
+  for (const auto& [spec, eye] : std::vector<std::pair<std::string, Vec3f>>{
+           {"soup:n=3000", {3000.0f, -7000.0f, 5000.0f}},
+           {"transformed:of=(soup:n=3000),translate=3e4:-1e4:2e4", {0.0f, 0.0f, 0.0f}}}) {
+    const auto scene = make_scene(spec);
+    const Bounds3f b = scene->bounds();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 2000; ++i) {
+      Ray r;
+      r.org = eye;
+      const Vec3f target = b.lo + b.diagonal() * Vec3f(unit(rng), unit(rng), unit(rng));
+      r.dir = normalize(target - eye);
+      rays.push_back(r);
+    }
+    const auto oracle = make_accelerator("exact", scene);
+    const TraceResult exact = trace_rays(*oracle, rays, TraceOptions{1, false, false});
+    const TraceResult exact_any = trace_rays(*oracle, rays, TraceOptions{1, false, true});
+    ASSERT_GT(exact.hit_count, rays.size() / 4) << spec;
+    for (const std::string accel : {"grid", "nested-grid", "grid:mailbox=off"}) {
+      const auto grid = make_accelerator(accel, scene);
+      const TraceResult got = trace_rays(*grid, rays, TraceOptions{1, true, false});
+      const HitComparison c = compare_hits_exact(*scene, rays, got.hits, exact.hits);
+      EXPECT_EQ(c.mismatches, 0u) << accel << " on " << spec;
+      EXPECT_LT(double(got.counters.prim_tests), 20.0 * double(rays.size())) << accel << " on " << spec;
+      const TraceResult any = trace_rays(*grid, rays, TraceOptions{1, true, true});
+      EXPECT_EQ(compare_occlusion(any.blocked, exact_any.blocked).mismatches, 0u) << accel << " (any hit) on " << spec;
+      EXPECT_LT(double(any.counters.prim_tests), 20.0 * double(rays.size())) << accel << " (any hit) on " << spec;
+    }
+  }
+}
+
 // A scene far from the world origin is placed and walked in a frame near it (grid_frame.h): the
 // frame's translation is exact, and its grids hold about as many references as the same scene's
 // at the origin. In the world frame the placement margin, 2^-16 of the coordinates' magnitude,

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "accel/common/kernel_choice.h"
 #include "accel/grid/cell_triangles.h"
 #include "accel/grid/grid_config.h"
 #include "accel/grid/grid_geometry.h"
@@ -46,8 +47,8 @@ inline bool intersect_cell_ref(const Scene& scene, const CellTriangles& tris, st
 }
 
 /// Every primitive of `scene` offered to the certified kernel: the grids' path for a ray whose
-/// 3D-DDA would leave the placement margin (a ray from far outside the scene). True on a hit
-/// (with kAnyHit, at the first).
+/// 3D-DDA would leave the placement margin even from where it enters the grid (EntryRay,
+/// grid_geometry.h). True on a hit (with kAnyHit, at the first).
 template <bool kAnyHit, class Counters>
 inline bool certified_over_all_primitives(const Scene& scene, const Ray& ray, Hit& hit, Counters& counters) {
   CertifiedKernel::Context ctx = CertifiedKernel::prepare(ray);
@@ -140,7 +141,8 @@ struct ClosestHitInCells {
 /// ends at or after the certified upper bound of the first hit's exact t: every t' below it lies
 /// in the interval of a visited cell, whose primitives include every one the exact ray meets at
 /// t' as long as the 3D-DDA stays within the placement margin of its cells
-/// (dda_within_margin, grid_geometry.h; the grids check it per ray).
+/// (dda_within_margin, grid_geometry.h; the grids check it per ray). The cells' intervals are in
+/// the t of the DDA's ray, which is the world ray's t minus t_base (an EntryRay's, else 0).
 template <class Counters, bool kMailbox>
 struct ClosestHitInCells<CertifiedKernel, Counters, kMailbox> {
   const Scene& scene;
@@ -149,6 +151,7 @@ struct ClosestHitInCells<CertifiedKernel, Counters, kMailbox> {
   Counters& counters;
   Hit hit;
   bool found = false;
+  double t_base = 0.0;
   [[no_unique_address]] std::conditional_t<kMailbox, RayMailbox, NoMailbox> mailbox;
 
   ClosestHitInCells(const Scene& s, const CellTriangles& ct, const Ray& ray, GridAcceptance, float, Counters& c)
@@ -167,7 +170,15 @@ struct ClosestHitInCells<CertifiedKernel, Counters, kMailbox> {
       }
       found |= intersect_cell_ref<CertifiedKernel>(scene, tris, *p, ctx, hit, counters);
     }
-    return found && CertifiedKernel::best_upper(ctx) <= t_exit;
+    return found && covers(CertifiedKernel::best_upper(ctx), t_exit);
+  }
+
+  /// Whether every world t up to `upper` lies at or before t_base + t_exit (the double sum
+  /// lowered by its rounding).
+  bool covers(float upper, float t_exit) const {
+    if (t_base == 0.0) return upper <= t_exit;
+    const double t = t_base + double(t_exit);
+    return double(upper) <= t - 0x1p-52 * std::abs(t);
   }
 };
 
@@ -202,41 +213,61 @@ struct AnyHitInCells {
   }
 };
 
-/// The grid's part of a closest-hit query shared by the uniform and the nested grid: `walk(state)`
-/// runs the 3D-DDA of `local` (the ray in the grid's frame, grid_frame.h) over its clipped
-/// interval (ending at t1) with a ClosestHitInCells state, whose kernel tests `ray`; with the
-/// certified kernel, a ray whose DDA could leave the placement margin `margin` of the grid box
-/// `box` (dda_within_margin, in the frame) is offered every primitive instead. On a hit, writes
-/// `hit` and sets ray.tmax to its t.
+/// A grid query: the ray in the grid's frame (grid_frame.h), its interval [t0, t1] clipped to
+/// the grid's box, and the grid's box, frame origin and placement margin.
+struct GridQuery {
+  const Ray& local;
+  float t0, t1;
+  const Bounds3f& box;
+  const Vec3f& frame_origin;
+  float margin;
+};
+
+/// The grid's part of a closest-hit query shared by the uniform and the nested grid:
+/// `walk(state, dda_ray, s0, s1)` runs the 3D-DDA of dda_ray over [s0, s1] with a
+/// ClosestHitInCells state, whose kernel tests `ray`. The DDA's ray is q.local over [q.t0, q.t1];
+/// with the certified kernel, when that DDA could leave the placement margin (dda_within_margin: a
+/// ray from far outside), it is the EntryRay of `ray` (grid_geometry.h) if that one stays within
+/// the margin less its offset (and no ray when the EntryRay misses the box), and otherwise every
+/// primitive is offered instead. On a hit, writes `hit` and sets ray.tmax to its t.
 template <class Kernel, class Counters, bool kMailbox, class Walk>
-inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, const Ray& local,
-                                float t1, const Bounds3f& box, float margin, GridAcceptance acceptance, float extent,
-                                Counters& counters, Walk&& walk) {
-  bool found;
-  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(local, t1, box, margin)) {
-    ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(local, extent),
-                                                        counters);
-    walk(state);
-    found = state.found;
-    if (found) hit = state.hit;
-  } else {
-    found = certified_over_all_primitives<false>(scene, ray, hit, counters);
+inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, const GridQuery& q,
+                                GridAcceptance acceptance, float extent, Counters& counters, Walk&& walk) {
+  ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(q.local, extent),
+                                                      counters);
+  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin)) {
+    walk(state, q.local, q.t0, q.t1);
+  } else if constexpr (std::is_same_v<Kernel, CertifiedKernel>) {
+    const EntryRay entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
+    if (entry.offset >= q.margin) {
+      state.found = certified_over_all_primitives<false>(scene, ray, state.hit, counters);
+    } else if (!entry.missed && dda_within_margin(entry.ray, entry.ray.tmax, q.box, q.margin - entry.offset)) {
+      state.t_base = entry.t_base;
+      walk(state, entry.ray, 0.0f, entry.ray.tmax);
+    } else if (!entry.missed) {
+      state.found = certified_over_all_primitives<false>(scene, ray, state.hit, counters);
+    }
   }
-  if (found) ray.tmax = hit.t;
-  return found;
+  if (!state.found) return false;
+  hit = state.hit;
+  ray.tmax = hit.t;
+  return true;
 }
 
-/// The any-hit counterpart of closest_hit_in_grid: `walk(state)` with an AnyHitInCells state,
-/// returning whether it found a hit; `ray` is any_hit_ray of the query, `local` the same in the frame.
+/// The any-hit counterpart of closest_hit_in_grid: `walk(state, dda_ray, s0, s1)` with an
+/// AnyHitInCells state, returning whether it found a hit; `ray` is any_hit_ray of the query.
 template <class Kernel, class Counters, bool kMailbox, class Walk>
-inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, const Ray& local, float t1,
-                            const Bounds3f& box, float margin, Counters& counters, Walk&& walk) {
-  if (std::is_same_v<Kernel, CertifiedKernel> && !dda_within_margin(local, t1, box, margin)) {
-    Hit hit;
-    return certified_over_all_primitives<true>(scene, ray, hit, counters);
-  }
+inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, const GridQuery& q,
+                            Counters& counters, Walk&& walk) {
   AnyHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, counters);
-  return walk(state);
+  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin))
+    return walk(state, q.local, q.t0, q.t1);
+  const EntryRay entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
+  if (entry.offset < q.margin && entry.missed) return false;
+  if (entry.offset < q.margin && dda_within_margin(entry.ray, entry.ray.tmax, q.box, q.margin - entry.offset))
+    return walk(state, entry.ray, 0.0f, entry.ray.tmax);
+  Hit hit;
+  return certified_over_all_primitives<true>(scene, ray, hit, counters);
 }
 
 }  // namespace raylab

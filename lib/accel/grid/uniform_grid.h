@@ -4,7 +4,7 @@
 /// Traversal: the 3D-DDA of Amanatides and Woo 1987 (grid_traversal.h) with in-cell acceptance
 /// and a per-ray mailbox (cell_intersector.h); with kernel=certified, the certified acceptance
 /// of cell_intersector.h and, for a ray whose DDA could leave the placement margin
-/// (dda_within_margin), every primitive.
+/// (dda_within_margin), the DDA from where it enters the grid (EntryRay, grid_geometry.h).
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -67,8 +67,8 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     float t0, t1;
     if (!intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
     return closest_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, hit, local, t1, grid_.box, margin_, config_.acceptance, extent_, counters,
-        [&](auto& state) { return walk(local, inv, t0, t1, state, counters); });
+        *scene_, tris_, ray, hit, GridQuery{local, t0, t1, grid_.box, origin_, margin_}, config_.acceptance, extent_,
+        counters, [&](auto& state, const Ray& r, float s0, float s1) { return walk(r, inv, s0, s1, state, counters); });
   }
 
   template <class Kernel, class Counters, bool kMailbox>
@@ -78,11 +78,12 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     const Vec3f inv = safe_inverse(ray.dir);
     float t0, t1;
     if (!intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, local, t1, grid_.box, margin_, counters,
-                                                       [&](auto& state) { return walk(local, inv, t0, t1, state, counters); });
+    return any_hit_in_grid<Kernel, Counters, kMailbox>(
+        *scene_, tris_, ray, GridQuery{local, t0, t1, grid_.box, origin_, margin_}, counters,
+        [&](auto& state, const Ray& r, float s0, float s1) { return walk(r, inv, s0, s1, state, counters); });
   }
 
-  /// The 3D-DDA of `local` (the ray in the grid's frame) over [t0, t1], offering each non-empty
+  /// The 3D-DDA of `local` (a ray in the grid's frame) over [t0, t1], offering each non-empty
   /// cell to `state`; true when `state` stopped it.
   template <class State, class Counters>
   bool walk(const Ray& local, const Vec3f& inv, float t0, float t1, State& state, Counters& counters) const {

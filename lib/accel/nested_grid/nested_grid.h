@@ -87,7 +87,7 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
   std::uint32_t build_level(const Scene& placed, const std::uint32_t* prims, std::size_t n, const Bounds3f& box,
                             int level, std::vector<CellLists>& lists);
 
-  /// The 3D-DDA of `local` (the ray in the grid's frame) through level gi over [t0, t1].
+  /// The 3D-DDA of `local` (a ray in the grid's frame) through level gi over [t0, t1].
   template <class Counters, class State>
   bool traverse(std::uint32_t gi, const Ray& local, const Vec3f& inv, float t0, float t1, State& state,
                 Counters& counters) const {
@@ -112,8 +112,9 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     float t0, t1;
     if (!intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
     return closest_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, hit, local, t1, box, margin_, config_.cells.acceptance, extent_, counters,
-        [&](auto& state) { return traverse(0, local, inv, t0, t1, state, counters); });
+        *scene_, tris_, ray, hit, GridQuery{local, t0, t1, box, origin_, margin_}, config_.cells.acceptance, extent_,
+        counters,
+        [&](auto& state, const Ray& r, float s0, float s1) { return traverse(0, r, inv, s0, s1, state, counters); });
   }
 
   template <class Kernel, class Counters, bool kMailbox>
@@ -124,8 +125,9 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     const Bounds3f& box = levels_[0].geom.box;
     float t0, t1;
     if (!intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
-    return any_hit_in_grid<Kernel, Counters, kMailbox>(*scene_, tris_, ray, local, t1, box, margin_, counters,
-                                                       [&](auto& state) { return traverse(0, local, inv, t0, t1, state, counters); });
+    return any_hit_in_grid<Kernel, Counters, kMailbox>(
+        *scene_, tris_, ray, GridQuery{local, t0, t1, box, origin_, margin_}, counters,
+        [&](auto& state, const Ray& r, float s0, float s1) { return traverse(0, r, inv, s0, s1, state, counters); });
   }
 
   std::shared_ptr<const Scene> scene_;
