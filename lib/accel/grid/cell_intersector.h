@@ -213,15 +213,27 @@ struct AnyHitInCells {
   }
 };
 
-/// A grid query: the ray in the grid's frame (grid_frame.h), its interval [t0, t1] clipped to
-/// the grid's box, and the grid's box, frame origin and placement margin.
+/// A grid query: the ray in the grid's frame (grid_frame.h), whether its float box test met the
+/// grid's box and the interval [t0, t1] it clipped, and the grid's box, frame origin and placement
+/// margin.
 struct GridQuery {
   const Ray& local;
+  bool entered;
   float t0, t1;
   const Bounds3f& box;
   const Vec3f& frame_origin;
   float margin;
 };
+
+/// Whether a query whose float box test missed the grid's box meets no primitive. Ize's box test
+/// (bounds.h) is conservative for the float ray it is given: the world ray itself in the world
+/// frame, else the world ray moved into the frame and rounded (u/2·|o|∞), and primitives lie the
+/// placement margin inside the box. The watertight kernel claims nothing there.
+template <class Kernel>
+inline bool trusts_box_miss(const GridQuery& q) {
+  return !std::is_same_v<Kernel, CertifiedKernel> || q.frame_origin == Vec3f(0.0f) ||
+         0x1p-23f * max_component(abs(q.local.org)) < q.margin;
+}
 
 /// The grid's part of a closest-hit query shared by the uniform and the nested grid:
 /// `walk(state, dda_ray, s0, s1)` runs the 3D-DDA of dda_ray over [s0, s1] with a
@@ -233,9 +245,10 @@ struct GridQuery {
 template <class Kernel, class Counters, bool kMailbox, class Walk>
 inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, const GridQuery& q,
                                 GridAcceptance acceptance, float extent, Counters& counters, Walk&& walk) {
+  if (!q.entered && trusts_box_miss<Kernel>(q)) return false;
   ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(q.local, extent),
                                                       counters);
-  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin)) {
+  if (q.entered && (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin))) {
     walk(state, q.local, q.t0, q.t1);
   } else if constexpr (std::is_same_v<Kernel, CertifiedKernel>) {
     const EntryRay entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
@@ -259,8 +272,9 @@ inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, R
 template <class Kernel, class Counters, bool kMailbox, class Walk>
 inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, const GridQuery& q,
                             Counters& counters, Walk&& walk) {
+  if (!q.entered && trusts_box_miss<Kernel>(q)) return false;
   AnyHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, counters);
-  if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin))
+  if (q.entered && (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin)))
     return walk(state, q.local, q.t0, q.t1);
   const EntryRay entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
   if (entry.offset < q.margin && entry.missed) return false;

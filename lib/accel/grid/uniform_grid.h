@@ -64,10 +64,10 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
   bool closest(Ray& ray, Hit& hit, Counters& counters) const {
     const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
-    float t0, t1;
-    if (!intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    float t0 = 0.0f, t1 = 0.0f;
+    const bool entered = intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1);
     return closest_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, hit, GridQuery{local, t0, t1, grid_.box, origin_, margin_}, config_.acceptance, extent_,
+        *scene_, tris_, ray, hit, GridQuery{local, entered, t0, t1, grid_.box, origin_, margin_}, config_.acceptance, extent_,
         counters, [&](auto& state, const Ray& r, float s0, float s1) { return walk(r, inv, s0, s1, state, counters); });
   }
 
@@ -76,10 +76,10 @@ class UniformGrid final : public AggregateBase<UniformGrid> {
     const Ray ray = any_hit_ray<Kernel>(query);
     const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
-    float t0, t1;
-    if (!intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    float t0 = 0.0f, t1 = 0.0f;
+    const bool entered = intersect_box(grid_.box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1);
     return any_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, GridQuery{local, t0, t1, grid_.box, origin_, margin_}, counters,
+        *scene_, tris_, ray, GridQuery{local, entered, t0, t1, grid_.box, origin_, margin_}, counters,
         [&](auto& state, const Ray& r, float s0, float s1) { return walk(r, inv, s0, s1, state, counters); });
   }
 

@@ -109,10 +109,10 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
     const Bounds3f& box = levels_[0].geom.box;
-    float t0, t1;
-    if (!intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    float t0 = 0.0f, t1 = 0.0f;
+    const bool entered = intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1);
     return closest_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, hit, GridQuery{local, t0, t1, box, origin_, margin_}, config_.cells.acceptance, extent_,
+        *scene_, tris_, ray, hit, GridQuery{local, entered, t0, t1, box, origin_, margin_}, config_.cells.acceptance, extent_,
         counters,
         [&](auto& state, const Ray& r, float s0, float s1) { return traverse(0, r, inv, s0, s1, state, counters); });
   }
@@ -123,10 +123,10 @@ class NestedGrid final : public AggregateBase<NestedGrid> {
     const Ray local = in_frame(ray, origin_);
     const Vec3f inv = safe_inverse(ray.dir);
     const Bounds3f& box = levels_[0].geom.box;
-    float t0, t1;
-    if (!intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1)) return false;
+    float t0 = 0.0f, t1 = 0.0f;
+    const bool entered = intersect_box(box, local, inv, ray.tmin, initial_closest<Kernel>(ray), t0, t1);
     return any_hit_in_grid<Kernel, Counters, kMailbox>(
-        *scene_, tris_, ray, GridQuery{local, t0, t1, box, origin_, margin_}, counters,
+        *scene_, tris_, ray, GridQuery{local, entered, t0, t1, box, origin_, margin_}, counters,
         [&](auto& state, const Ray& r, float s0, float s1) { return traverse(0, r, inv, s0, s1, state, counters); });
   }
 
