@@ -10,6 +10,7 @@
 #include "accel/common/kernel_choice.h"
 #include "accel/grid/cell_triangles.h"
 #include "accel/grid/grid_config.h"
+#include "accel/grid/grid_frame.h"
 #include "accel/grid/grid_geometry.h"
 #include "accel/grid/mailbox.h"
 #include "geometry/certified_kernel.h"
@@ -231,40 +232,62 @@ struct GridQuery {
 /// placement margin inside the box. The watertight kernel claims nothing there.
 template <class Kernel>
 inline bool trusts_box_miss(const GridQuery& q) {
-  return !std::is_same_v<Kernel, CertifiedKernel> || q.frame_origin == Vec3f(0.0f) ||
+  return !std::is_same_v<Kernel, CertifiedKernel> || is_world_frame(q.frame_origin) ||
          0x1p-23f * max_component(abs(q.local.org)) < q.margin;
+}
+
+/// How a grid query is answered (grid_path).
+enum class GridPath {
+  none,            ///< no primitive can be met
+  local,           ///< the 3D-DDA of q.local over [q.t0, q.t1]
+  entry,           ///< the 3D-DDA of the EntryRay over [0, its tmax]
+  every_primitive  ///< certified_over_all_primitives
+};
+
+/// The path of query `q` of `ray` (the world ray; for any-hit queries its any_hit_ray): q.local's
+/// DDA unless a float box miss decides it (trusts_box_miss) or, with the certified kernel, that
+/// DDA could leave the placement margin (dda_within_margin: a ray from far outside). Then the
+/// EntryRay of `ray` (grid_geometry.h, written to `entry`) if it stays within the margin less its
+/// offset, none when it misses the box, and otherwise every primitive.
+template <class Kernel>
+inline GridPath grid_path(const Ray& ray, const GridQuery& q, EntryRay& entry) {
+  if (!q.entered) {
+    if (trusts_box_miss<Kernel>(q)) return GridPath::none;
+  } else if (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin)) {
+    return GridPath::local;
+  }
+  entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
+  if (entry.offset >= q.margin) return GridPath::every_primitive;
+  if (entry.missed) return GridPath::none;
+  return dda_within_margin(entry.ray, entry.ray.tmax, q.box, q.margin - entry.offset) ? GridPath::entry
+                                                                                       : GridPath::every_primitive;
 }
 
 /// The grid's part of a closest-hit query shared by the uniform and the nested grid:
 /// `walk(state, dda_ray, s0, s1)` runs the 3D-DDA of dda_ray over [s0, s1] with a
-/// ClosestHitInCells state, whose kernel tests `ray`. The DDA's ray is q.local over [q.t0, q.t1];
-/// with the certified kernel, when that DDA could leave the placement margin (dda_within_margin: a
-/// ray from far outside), it is the EntryRay of `ray` (grid_geometry.h) if that one stays within
-/// the margin less its offset (and no ray when the EntryRay misses the box), and otherwise every
-/// primitive is offered instead. On a hit, writes `hit` and sets ray.tmax to its t.
+/// ClosestHitInCells state, whose kernel tests `ray`, on the path grid_path chooses. On a hit,
+/// writes `hit` and sets ray.tmax to its t.
 template <class Kernel, class Counters, bool kMailbox, class Walk>
 inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, Ray& ray, Hit& hit, const GridQuery& q,
                                 GridAcceptance acceptance, float extent, Counters& counters, Walk&& walk) {
-  if (!q.entered && trusts_box_miss<Kernel>(q)) return false;
-  ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(q.local, extent),
-                                                      counters);
-  if (q.entered && (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin))) {
-    walk(state, q.local, q.t0, q.t1);
-  } else if constexpr (std::is_same_v<Kernel, CertifiedKernel>) {
-    const EntryRay entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
-    if (entry.offset >= q.margin) {
-      state.found = certified_over_all_primitives<false>(scene, ray, state.hit, counters);
-    } else if (!entry.missed && dda_within_margin(entry.ray, entry.ray.tmax, q.box, q.margin - entry.offset)) {
-      state.t_base = entry.t_base;
-      walk(state, entry.ray, 0.0f, entry.ray.tmax);
-    } else if (!entry.missed) {
-      state.found = certified_over_all_primitives<false>(scene, ray, state.hit, counters);
+  EntryRay entry;
+  const GridPath path = grid_path<Kernel>(ray, q, entry);
+  bool found = false;
+  if (path == GridPath::every_primitive) {
+    found = certified_over_all_primitives<false>(scene, ray, hit, counters);
+  } else if (path != GridPath::none) {
+    ClosestHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, acceptance, cell_widening(q.local, extent),
+                                                        counters);
+    if constexpr (std::is_same_v<Kernel, CertifiedKernel>) {
+      if (path == GridPath::entry) state.t_base = entry.t_base;
     }
+    if (path == GridPath::local) walk(state, q.local, q.t0, q.t1);
+    else walk(state, entry.ray, 0.0f, entry.ray.tmax);
+    found = state.found;
+    if (found) hit = state.hit;
   }
-  if (!state.found) return false;
-  hit = state.hit;
-  ray.tmax = hit.t;
-  return true;
+  if (found) ray.tmax = hit.t;
+  return found;
 }
 
 /// The any-hit counterpart of closest_hit_in_grid: `walk(state, dda_ray, s0, s1)` with an
@@ -272,16 +295,15 @@ inline bool closest_hit_in_grid(const Scene& scene, const CellTriangles& tris, R
 template <class Kernel, class Counters, bool kMailbox, class Walk>
 inline bool any_hit_in_grid(const Scene& scene, const CellTriangles& tris, const Ray& ray, const GridQuery& q,
                             Counters& counters, Walk&& walk) {
-  if (!q.entered && trusts_box_miss<Kernel>(q)) return false;
+  EntryRay entry;
+  const GridPath path = grid_path<Kernel>(ray, q, entry);
+  if (path == GridPath::none) return false;
+  if (path == GridPath::every_primitive) {
+    Hit hit;
+    return certified_over_all_primitives<true>(scene, ray, hit, counters);
+  }
   AnyHitInCells<Kernel, Counters, kMailbox> state(scene, tris, ray, counters);
-  if (q.entered && (!std::is_same_v<Kernel, CertifiedKernel> || dda_within_margin(q.local, q.t1, q.box, q.margin)))
-    return walk(state, q.local, q.t0, q.t1);
-  const EntryRay entry = entry_ray(ray, initial_closest<Kernel>(ray), q.box, q.frame_origin);
-  if (entry.offset < q.margin && entry.missed) return false;
-  if (entry.offset < q.margin && dda_within_margin(entry.ray, entry.ray.tmax, q.box, q.margin - entry.offset))
-    return walk(state, entry.ray, 0.0f, entry.ray.tmax);
-  Hit hit;
-  return certified_over_all_primitives<true>(scene, ray, hit, counters);
+  return path == GridPath::local ? walk(state, q.local, q.t0, q.t1) : walk(state, entry.ray, 0.0f, entry.ray.tmax);
 }
 
 }  // namespace raylab

@@ -17,6 +17,9 @@
 
 namespace raylab {
 
+/// Whether a frame with this origin is the world frame (no translation).
+inline bool is_world_frame(const Vec3f& origin) { return origin == Vec3f(0.0f); }
+
 struct GridFrame {
   /// Subtracted from scene coordinates; 0 on every axis for a scene near the world origin.
   Vec3f origin{0.0f};
@@ -24,7 +27,7 @@ struct GridFrame {
   /// every coordinate minus origin is exact (a flat scene only).
   std::shared_ptr<const Scene> scene;
 
-  bool is_world() const { return origin.x == 0.0f && origin.y == 0.0f && origin.z == 0.0f; }
+  bool is_world() const { return is_world_frame(origin); }
 };
 
 /// The frame of a grid over `scene` (flat, not instanced). Per axis, the origin is the bound
