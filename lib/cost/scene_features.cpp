@@ -33,9 +33,8 @@ SceneFeatures scene_features(const Scene& scene) {
   const TriangleMesh& mesh = scene.mesh;
   const std::size_t n = mesh.size(), vertices = mesh.vertices.size();
   // One pass over the areas (their sum and the largest) and the vertices' box, in chunks.
-  std::vector<AreaPass> chunks((std::max(n, vertices) + kChunk - 1) / kChunk);
-  tbb::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) {
-    AreaPass pass;  // local: stores through chunks[c] would keep the sums out of registers
+  auto chunk_pass = [&](std::size_t c) {
+    AreaPass pass;  // local: stores through a chunk array would keep the sums out of registers
     for (std::size_t t = c * kChunk, end = std::min(n, t + kChunk); t < end; ++t) {
       const double area = triangle_area(mesh, t);
       pass.total += area;
@@ -44,13 +43,22 @@ SceneFeatures scene_features(const Scene& scene) {
     // TriangleMesh::bounds: holds every triangle.
     for (std::size_t v = c * kChunk, end = std::min(vertices, v + kChunk); v < end; ++v)
       pass.box.extend(mesh.vertices[v]);
-    chunks[c] = pass;
-  });
+    return pass;
+  };
+  const std::size_t chunk_count = (std::max(n, vertices) + kChunk - 1) / kChunk;
   AreaPass pass;
-  for (const AreaPass& c : chunks) {
-    pass.total += c.total;
-    pass.largest = std::max(pass.largest, c.largest);
-    pass.box.extend(c.box);
+  if (chunk_count <= 1) {
+    // One chunk: on the calling thread. `auto` asks this before every choice, and a task
+    // scheduler's first use in a process (its worker threads started) costs milliseconds.
+    if (chunk_count == 1) pass = chunk_pass(0);
+  } else {
+    std::vector<AreaPass> chunks(chunk_count);
+    tbb::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) { chunks[c] = chunk_pass(c); });
+    for (const AreaPass& c : chunks) {
+      pass.total += c.total;
+      pass.largest = std::max(pass.largest, c.largest);
+      pass.box.extend(c.box);
+    }
   }
   // Every stride-th area for the median.
   const std::size_t stride = std::max<std::size_t>(1, n / kMedianSample);
