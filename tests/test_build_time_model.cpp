@@ -3,13 +3,16 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <random>
 
 #include "cost/accel_spec_key.h"
+#include "accel/common/accel_factory.h"
 #include "cost/build_time_model.h"
 #include "cost/scene_features.h"
+#include "cost/tree_features.h"
 #include "geometry/input_error.h"
 #include "scene/scene_spec.h"
 
@@ -37,9 +40,16 @@ std::vector<RunRecord> synthetic_build_rows(double a, double b, double sigma, in
   return rows;
 }
 
+/// The features of a scene known by its count alone (spread 0).
+SceneFeatures counted(double primitives) {
+  SceneFeatures f;
+  f.primitives = primitives;
+  return f;
+}
+
 TEST(BuildTimeModel, RecoversKnownConstantsWithinTheirStandardErrors) {
   const double a = 40e-9, b = 300e-9;
-  const BuildTimeModels models = fit_build_time_models(synthetic_build_rows(a, b, 0.03, 14, 7), FitOptions{});
+  const BuildTimeModels models = fit_build_time_models(synthetic_build_rows(a, b, 0.03, 14, 7), {}, FitOptions{});
   ASSERT_EQ(models.size(), 1u);
   const SelectedLinearModel& m = models.at("bvh:builder=spatial");
   EXPECT_EQ(m.rows, 14u);  // one row per (scene, accel)
@@ -59,27 +69,60 @@ TEST(BuildTimeModel, RecoversKnownConstantsWithinTheirStandardErrors) {
   EXPECT_GE(m.coverage90, 0.7);
   EXPECT_EQ(m.range_lo, 1000.0);
   EXPECT_EQ(m.range_hi, 1e6);
-  const FeatureRow f = build_time_features(2e5);
+  const FeatureRow f = build_time_features(counted(2e5));
   const auto [lo, hi] = m.interval90(f, 2e5);
   const double truth = a * 2e5 * std::log2(2e5) + b * 2e5;
   EXPECT_LT(lo, truth);
   EXPECT_GT(hi, truth);
 }
 
+TEST(BuildTimeModel, KeepsTheSpreadWhereBuildTimesFollowIt) {
+  // Build seconds b·N + e·spread, the spread 0.3 to 8 references per triangle independently of N
+  // (as a grid's over meshes, soups and walls): the fit keeps the spread and recovers e, and
+  // without scene features the N terms alone cannot follow the times.
+  const double b = 60e-9, e = 25e-9;
+  std::vector<RunRecord> rows = synthetic_build_rows(0, b, 0.0, 12, 4);
+  SceneFeatureTable table;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  const double per_triangle[] = {0.3, 8.0, 2.0, 0.8, 5.0};
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    RunRecord& r = rows[i];
+    const double n = static_cast<double>(r.primitives);
+    SceneFeatures f;
+    f.primitives = f.triangles = n;
+    f.largest_extent = 1;
+    const double spread = per_triangle[(i / 2) % 5] * n;
+    f.sqrt_area_sum = spread / (0.75 * std::sqrt(12 * std::sqrt(3.0)) * std::cbrt(n));  // spread_references' form
+    ASSERT_NEAR(spread_references(f), spread, 1e-9 * spread);
+    table[r.scene] = f;
+    if (i % 2 == 0) r.build_s = (b * n + e * spread) * std::exp(noise(rng));
+    else r.build_s = rows[i - 1].build_s;  // the same (scene, accel): one build
+  }
+  const SelectedLinearModel with = fit_build_time_models(rows, table, FitOptions{}).at("bvh:builder=spatial");
+  ASSERT_TRUE(with.cross_validated);
+  EXPECT_NE(std::find(with.terms.begin(), with.terms.end(), "spread"), with.terms.end());
+  EXPECT_LE(std::abs(with.value_of("spread") - e), 3 * with.std_error_of("spread"))
+      << with.value_of("spread") << " ± " << with.std_error_of("spread");
+  EXPECT_LT(with.held_out_mape, 0.06);
+  const SelectedLinearModel without = fit_build_time_models(rows, {}, FitOptions{}).at("bvh:builder=spatial");
+  EXPECT_GT(without.held_out_mape, 3 * with.held_out_mape);
+}
+
 TEST(BuildTimeModel, AFitWithoutTheRightFormIsNotHiddenByTheInterval) {
   // Pure N² build times: the N·log N + N form cannot follow them, and says so in its held-out error.
   std::vector<RunRecord> rows = synthetic_build_rows(1e-9, 0, 0.0, 10, 1);
   for (RunRecord& r : rows) r.build_s = 1e-12 * static_cast<double>(r.primitives) * static_cast<double>(r.primitives);
-  const SelectedLinearModel m = fit_build_time_models(rows, FitOptions{}).at("bvh:builder=spatial");
+  const SelectedLinearModel m = fit_build_time_models(rows, {}, FitOptions{}).at("bvh:builder=spatial");
   EXPECT_GT(m.held_out_mape, 0.3);
   EXPECT_GT(m.log_q90, std::log(1.5));
 }
 
 TEST(BuildTimeModel, IntervalWidensOutsideTheFittedRange) {
-  const SelectedLinearModel m = fit_build_time_models(synthetic_build_rows(40e-9, 300e-9, 0.05, 8, 3), FitOptions{})
+  const SelectedLinearModel m = fit_build_time_models(synthetic_build_rows(40e-9, 300e-9, 0.05, 8, 3), {}, FitOptions{})
                                     .at("bvh:builder=spatial");
   auto relative_width = [&](double n) {
-    const auto [lo, hi] = m.interval90(build_time_features(n), n);
+    const auto [lo, hi] = m.interval90(build_time_features(counted(n)), n);
     return hi / lo;
   };
   EXPECT_EQ(m.extrapolation_factor(5e5), 1.0);
@@ -99,7 +142,7 @@ TEST(BuildTimeModel, RowsWithoutBuildTimesOrTooFewScenesAreLeftOut) {
   rows.push_back(lone);
   std::vector<std::string> notes;
   const BuildTimeModels models =
-      fit_build_time_models(rows, FitOptions{}, [&](const std::string& line) { notes.push_back(line); });
+      fit_build_time_models(rows, {}, FitOptions{}, [&](const std::string& line) { notes.push_back(line); });
   EXPECT_EQ(models.count("grid"), 0u);  // one row cannot fit two terms
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes.front().find("grid"), std::string::npos);
@@ -107,7 +150,7 @@ TEST(BuildTimeModel, RowsWithoutBuildTimesOrTooFewScenesAreLeftOut) {
 }
 
 TEST(BuildTimeModel, ModelFileSectionRoundTripsAndRejectsBadEntries) {
-  const BuildTimeModels models = fit_build_time_models(synthetic_build_rows(40e-9, 300e-9, 0.03, 8, 9), FitOptions{});
+  const BuildTimeModels models = fit_build_time_models(synthetic_build_rows(40e-9, 300e-9, 0.03, 8, 9), {}, FitOptions{});
   const nlohmann::ordered_json j = build_time_models_json(models);
   const auto& e = j.at("bvh:builder=spatial");
   for (const char* key : {"terms", "values", "std_errors", "held_out", "range"}) EXPECT_TRUE(e.contains(key)) << key;
@@ -169,6 +212,31 @@ TEST(SceneFeatures, CountAreasAndTheirSpread) {
   const SceneFeatures sphere = scene_features(*make_scene("sphere:n=2000"));
   EXPECT_LT(sphere.area_ratio, 4.0);
   EXPECT_NEAR(sphere.crossings, 4 * M_PI / 24, 0.02);  // 4πr² over the box 6·(2r)²
+}
+
+TEST(SceneFeatures, TheSpreadEstimatesTheReferencesOfAGridOfNCells) {
+  // N + spread_references against the references grid:d=1 places (clipped, one per cell a
+  // triangle meets): a closed mesh, a soup of random triangles and a sphereflake of several sizes.
+  for (const char* spec : {"sphere:n=3000", "soup:n=3000,seed=3", "sphereflake:depth=1,as=triangles"}) {
+    const auto scene = make_scene(spec);
+    const SceneFeatures f = scene_features(*scene);
+    const auto grid = make_accelerator("grid:d=1", scene);
+    const double counted = static_cast<double>(tree_features(*grid, *scene).references);
+    const double estimated = f.primitives + spread_references(f);
+    EXPECT_GT(estimated, 0.75 * counted) << spec << ": estimated " << estimated << ", counted " << counted;
+    EXPECT_LT(estimated, 1.25 * counted) << spec << ": estimated " << estimated << ", counted " << counted;
+    // A property of the shape alone: the same scene scaled by 1000 has the same spread.
+    const SceneFeatures scaled =
+        scene_features(*make_scene("transformed:of=(" + std::string(spec) + "),scale=1000"));
+    EXPECT_NEAR(spread_references(scaled), spread_references(f), 1e-4 * spread_references(f)) << spec;
+  }
+  // One unit triangle in its own box: h = the box's side, the spread (3/4)·P + (3/2)·A of it.
+  auto one = std::make_shared<Scene>();
+  one->mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5f, std::sqrt(3.0f) / 2, 0}};
+  one->mesh.triangles = {{0, 1, 2}};
+  const SceneFeatures f = scene_features(*one);
+  EXPECT_NEAR(spread_references(f), 0.75 * 3 + 1.5 * std::sqrt(3.0) / 4, 1e-5);
+  EXPECT_EQ(spread_references(SceneFeatures{}), 0.0);
 }
 
 TEST(SceneFeatures, TheSameOnOneThreadAndOnMany) {

@@ -16,6 +16,7 @@
 #include "cost/build_time_model.h"
 #include "cost/merge.h"
 #include "cost/model_file.h"
+#include "cost/scene_features.h"
 #include "cost/sweep.h"
 #include "geometry/input_error.h"
 #include "geometry/input_warning.h"
@@ -297,7 +298,11 @@ int run_predict_command(const PredictCommand& o) {
   // The build-time model of this accelerator spec (build_time_model.h), when the model file has one.
   const double n = scene->total_primitive_count();
   if (const SelectedLinearModel* b = find_spec_model(models.build, o.accel)) {
-    const FeatureRow f = build_time_features(n);
+    // An instanced scene's own features are its flat part's: its build is predicted from its count.
+    SceneFeatures scene_f;
+    if (!scene->instanced()) scene_f = scene_features(*scene);
+    scene_f.primitives = n;
+    const FeatureRow f = build_time_features(scene_f);
     const auto [lo, hi] = b->interval90(f, n);
     j["predicted_build_s"] = b->predict(f);
     j["interval90_build_s"] = {lo, hi};

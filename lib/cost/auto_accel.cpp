@@ -173,7 +173,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   const auto start = Clock::now();
   const SceneFeatures sf = scene_features(*scene);
   const FeatureRow trace_x = scene_trace_features(sf);
-  const FeatureRow build_x = build_time_features(sf.primitives);
+  const FeatureRow build_x = build_time_features(sf);
   const std::vector<std::string> classes = classes_of(choice.rays);
   std::vector<std::string> families;
   for (const auto& [family, m] : models.families) families.push_back(family);

@@ -286,8 +286,11 @@ CostModelSet fit_cost_model_set(const std::vector<RunRecord>& measured, const Fi
     set.families[name] = std::move(m);
   }
   if (progress) progress("fitting the build-time and scene-level models");
-  set.build = fit_build_time_models(measured, options, progress);
-  set.scene_trace = fit_scene_trace_models(runs, options, progress);
+  std::vector<std::string> scenes;
+  for (const RunRecord& r : runs) scenes.push_back(r.scene);
+  const SceneFeatureTable features = load_scene_features(scenes, progress);
+  set.build = fit_build_time_models(measured, features, options, progress);
+  set.scene_trace = fit_scene_trace_models(runs, features, options, progress);
   return set;
 }
 

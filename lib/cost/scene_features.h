@@ -9,8 +9,15 @@
 ///    the scene seen by a line;
 ///  - `area_ratio` = largest / median triangle area: ≈ 1 for a uniform mesh, ≫ 1 for a
 ///    teapot in a stadium (Havran's "teapot in a stadium", the case uniform grids lose);
+///  - spread_references(): how many cells of a grid of about N cells the triangles meet beyond
+///    one each, what a spatial subdivision's build pays for (the build-time model's `spread`).
 /// Spheres count in `primitives` but not in the area statistics (triangles only).
 #include <cstddef>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "scene/scene.h"
 
@@ -25,7 +32,30 @@ struct SceneFeatures {
   double box_area = 0;       ///< surface area of the bounds of the flat geometry
   double crossings = 0;      ///< total_area / box_area (0 for an empty box)
   double area_ratio = 1;     ///< max_area / median_area (1 when undefined)
+  double sqrt_area_sum = 0;  ///< Σ √(triangle area)
+  double largest_extent = 0; ///< the scene box's largest side
 };
+
+/// The cells beyond one per triangle that the triangles meet in a grid of cubic cells of side
+/// h = largest_extent / ∛N (the lecture's resolution at density 1, grid_config.h): a convex
+/// planar piece of area A and perimeter P, placed at random, meets on average
+/// 1 + (3/4)·P/h + (3/2)·A/h² cells (Steiner's formula for the Minkowski sum with a cell, its
+/// face and edge terms averaged over orientations; Cauchy: the mean projection of a planar convex
+/// curve on a random axis is P/4, of a unit normal's component 1/2). P is taken as an equilateral
+/// triangle's, √(12√3·A) ≈ 4.56·√A, so that one pass needs one square root per triangle; thin
+/// triangles then count as compact ones. Against the references the grids count (clipped
+/// placement, cost_runs.csv): 0.6–1.3 times them over 25 scene and density pairs, lowest on walls
+/// and grass blades. 0 for a scene without triangles or extent.
+double spread_references(const SceneFeatures& f);
+
+/// Features by scene spec, as a fit's rows name their scenes: nullopt for a scene that cannot be
+/// loaded here or is instanced (its features are those of its flat part alone).
+using SceneFeatureTable = std::map<std::string, std::optional<SceneFeatures>>;
+
+/// Loads each of `scene_specs` once and computes its features; `progress` gets a line for each
+/// scene left out.
+SceneFeatureTable load_scene_features(const std::vector<std::string>& scene_specs,
+                                      const std::function<void(const std::string&)>& progress = {});
 
 /// Triangles the median area is taken over: every ⌊N/kMedianSample⌋-th one (all of a smaller scene),
 /// 1,024 to 2,047 of them: the selection over every triangle of a 16k-triangle mesh took as long as

@@ -7,7 +7,6 @@
 #include <optional>
 
 #include "geometry/input_error.h"
-#include "scene/scene_spec.h"
 
 namespace raylab {
 
@@ -30,22 +29,16 @@ FeatureRow scene_trace_features(const SceneFeatures& f) {
           {"log2_emptiness", f.total_area > 0 ? std::log2(1.0 + f.box_area / f.total_area) : 0.0}};
 }
 
-SceneTraceModels fit_scene_trace_models(const std::vector<RunRecord>& runs, const FitOptions& options,
+SceneTraceModels fit_scene_trace_models(const std::vector<RunRecord>& runs, const SceneFeatureTable& features,
+                                        const FitOptions& options,
                                         const std::function<void(const std::string&)>& progress) {
-  std::map<std::string, std::optional<SceneFeatures>> features;  // per scene spec, loaded once
-  for (const RunRecord& r : runs) {
-    if (features.count(r.scene)) continue;
-    std::optional<SceneFeatures>& f = features[r.scene];
-    try {
-      const auto scene = make_scene(r.scene);
-      if (!scene->instanced()) f = scene_features(*scene);
-    } catch (const InputError& e) {
-      if (progress) progress("scene-level model: scene " + r.scene + " left out (" + e.what() + ")");
-    }
-  }
+  auto features_of = [&](const std::string& scene) -> const SceneFeatures* {
+    const auto it = features.find(scene);
+    return it == features.end() || !it->second ? nullptr : &*it->second;
+  };
   std::map<std::pair<std::string, std::string>, std::vector<const RunRecord*>> groups;
   for (const RunRecord& r : runs)
-    if (features[r.scene] && r.ns_per_ray_min > 0) groups[{r.accel, ray_class_of(r.ray_kind)}].push_back(&r);
+    if (features_of(r.scene) && r.ns_per_ray_min > 0) groups[{r.accel, ray_class_of(r.ray_kind)}].push_back(&r);
   // The (spec, class) fits are independent: fitted in parallel, reported in order.
   const std::vector<std::pair<std::pair<std::string, std::string>, std::vector<const RunRecord*>>> work(groups.begin(),
                                                                                                        groups.end());
@@ -57,7 +50,7 @@ SceneTraceModels fit_scene_trace_models(const std::vector<RunRecord>& runs, cons
     std::vector<double> y, primitives;
     std::vector<std::string> scenes;
     for (const RunRecord* r : rows) {
-      x.push_back(scene_trace_features(*features.at(r->scene)));
+      x.push_back(scene_trace_features(*features_of(r->scene)));
       y.push_back(r->ns_per_ray_min);
       scenes.push_back(r->scene);
       primitives.push_back(static_cast<double>(r->primitives));

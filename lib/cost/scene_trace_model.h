@@ -8,9 +8,9 @@
 /// keeps them (selected_linear_model.h). Fitted with Ceres per accelerator spec and ray class
 /// (run_record.h: ray_class_of) on the data set's rows, to the fit's target time (model_fit.h).
 ///
-/// The data set has no scene-feature columns: the fit loads each scene of the rows once (by its
-/// spec) and computes its features. Rows whose scene cannot be loaded here, or is instanced, are
-/// left out and said so.
+/// The data set has no scene-feature columns: the fit takes each scene's features from a table
+/// (load_scene_features: each scene of the rows loaded once, by its spec). Rows whose scene has
+/// none there (it cannot be loaded here, or is instanced) are left out.
 #include <functional>
 #include <map>
 #include <nlohmann/json_fwd.hpp>
@@ -32,8 +32,9 @@ FeatureRow scene_trace_features(const SceneFeatures& f);
 /// Models by accelerator spec (as the data set spells it), then by ray class.
 using SceneTraceModels = std::map<std::string, std::map<std::string, SelectedLinearModel>>;
 
-/// Fits every (spec, ray class) of `runs` with rows of at least two scenes.
-SceneTraceModels fit_scene_trace_models(const std::vector<RunRecord>& runs, const FitOptions& options,
+/// Fits every (spec, ray class) of `runs` with rows of at least two scenes in `features`.
+SceneTraceModels fit_scene_trace_models(const std::vector<RunRecord>& runs, const SceneFeatureTable& features,
+                                        const FitOptions& options,
                                         const std::function<void(const std::string&)>& progress = {});
 
 /// model.json's `scene_trace` section: {SPEC: {CLASS: selected_linear_model_json}}.
