@@ -201,9 +201,26 @@ SelectedLinearModel fit_selected_linear_model(const std::vector<LinearTermDoc>& 
       keep[static_cast<std::size_t>(best)] = false;
       cv = best_cv;
     }
-  } else {  // too few scenes for every term: the required ones alone, held out if they can be
+  } else {  // too few scenes for every term: the required ones, then optional ones added forward
     for (std::size_t j = 0; j < present.size(); ++j) keep[j] = is_required[j];
     cv = leave_one_scene_out(terms_of(keep), x, y, scenes, options);
+    while (cv.valid) {
+      int best = -1;
+      CrossValidation best_cv = cv;
+      for (std::size_t j = 0; j < present.size(); ++j) {
+        if (keep[j]) continue;
+        std::vector<bool> trial = keep;
+        trial[j] = true;
+        const CrossValidation c = leave_one_scene_out(terms_of(trial), x, y, scenes, options);
+        if (c.valid && c.mape < best_cv.mape) {
+          best_cv = c;
+          best = static_cast<int>(j);
+        }
+      }
+      if (best < 0) break;
+      keep[static_cast<std::size_t>(best)] = true;
+      cv = best_cv;
+    }
   }
   const std::vector<std::string> terms = terms_of(keep);
   FitResult fit;

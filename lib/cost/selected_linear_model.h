@@ -15,14 +15,15 @@
 /// Selection: backward elimination as in model_selection.h: start from every candidate term whose
 /// feature is not 0 on every row, drop the optional term whose removal gives the lowest held-out
 /// MAPE while that error does not rise, stop when every removal raises it. With too few scenes
-/// to hold out a fit of every term, the required terms alone.
+/// to hold out a fit of every term, forward instead: from the required terms, add the optional
+/// term that lowers the held-out MAPE most, while one does and the scenes can hold the fit out.
 ///
 /// Interval: q90 = the 90% quantile of |ln(y/ŷ)| over the held-out predictions ŷ of the selected
 /// model; the interval is [ŷ·e^-q, ŷ·e^q], widened outside the fitted range of primitives N to
 /// q·(1 + |log2(N/nearest bound)|). Its coverage is measured on data that did not set it: each
 /// scene's held-out rows against the q90 of the other scenes' held-out residuals; `coverage90` is
 /// the fraction inside (with one row per scene, (n - 1)/n for n scenes by construction: a
-/// conformal interval). Without cross-validation (fewer scenes than terms + 1) only the required
+/// conformal interval). Without cross-validation (fewer scenes than required terms + 1) only the required
 /// terms are fitted, q90 comes from the in-sample residuals (scaled by sqrt(n/(n-k))) and the
 /// held-out figures are NaN.
 #include <map>
