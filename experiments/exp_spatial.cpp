@@ -426,7 +426,7 @@ int main(int argc, char** argv) {
       mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
       text += "\n" + section_anchor("claim-4") + "### Build complexity: sort against event sweep\n\n";
       const int max_log = opt.full() ? 22 : 18;
-      // Quick mode: 6 rounds per process; ./lab report decides claim 4 over 4 processes
+      // Quick mode: 6 rounds per process; ./lab report decides claim 4 over 3 processes
       // (PROCESS_REPLICATED_CLAIMS), whose spread, not one process's rounds, sets the interval.
       const int build_rounds = opt.full() ? 11 : 6;
       // Per N: the build seconds of each sweep over alternated rounds (sort, events, sort, ...).
