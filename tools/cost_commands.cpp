@@ -298,11 +298,7 @@ int run_predict_command(const PredictCommand& o) {
   // The build-time model of this accelerator spec (build_time_model.h), when the model file has one.
   const double n = scene->total_primitive_count();
   if (const SelectedLinearModel* b = find_spec_model(models.build, o.accel)) {
-    // An instanced scene's own features are its flat part's: its build is predicted from its count.
-    SceneFeatures scene_f;
-    if (!scene->instanced()) scene_f = scene_features(*scene);
-    scene_f.primitives = n;
-    const FeatureRow f = build_time_features(scene_f);
+    const FeatureRow f = build_time_features(scene_features(*scene));  // a flat scene: predict refuses instances
     const auto [lo, hi] = b->interval90(f, n);
     j["predicted_build_s"] = b->predict(f);
     j["interval90_build_s"] = {lo, hi};

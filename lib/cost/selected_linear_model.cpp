@@ -183,43 +183,34 @@ SelectedLinearModel fit_selected_linear_model(const std::vector<LinearTermDoc>& 
   };
   std::vector<bool> keep(present.size(), true);
   CrossValidation cv = leave_one_scene_out(present, x, y, scenes, options);
-  if (cv.valid) {
-    for (;;) {
-      int best = -1;
-      CrossValidation best_cv = cv;
-      for (std::size_t j = 0; j < present.size(); ++j) {
-        if (!keep[j] || is_required[j]) continue;
-        std::vector<bool> trial = keep;
-        trial[j] = false;
-        const CrossValidation c = leave_one_scene_out(terms_of(trial), x, y, scenes, options);
-        if (c.valid && c.mape <= best_cv.mape) {
-          best_cv = c;
-          best = static_cast<int>(j);
-        }
+  // One step of selection: the optional term whose removal (`add` false) or addition (`add` true)
+  // gives the lowest held-out MAPE, applied to `keep` and `cv`; false when none does as well as
+  // `cv` (a removal may keep the error, an addition must lower it).
+  auto step = [&](bool add) {
+    int best = -1;
+    CrossValidation best_cv = cv;
+    for (std::size_t j = 0; j < present.size(); ++j) {
+      if (is_required[j] || keep[j] == add) continue;
+      std::vector<bool> trial = keep;
+      trial[j] = add;
+      const CrossValidation c = leave_one_scene_out(terms_of(trial), x, y, scenes, options);
+      if (c.valid && (add ? c.mape < best_cv.mape : c.mape <= best_cv.mape)) {
+        best_cv = c;
+        best = static_cast<int>(j);
       }
-      if (best < 0) break;
-      keep[static_cast<std::size_t>(best)] = false;
-      cv = best_cv;
+    }
+    if (best < 0) return false;
+    keep[static_cast<std::size_t>(best)] = add;
+    cv = best_cv;
+    return true;
+  };
+  if (cv.valid) {
+    while (step(false)) {
     }
   } else {  // too few scenes for every term: the required ones, then optional ones added forward
     for (std::size_t j = 0; j < present.size(); ++j) keep[j] = is_required[j];
     cv = leave_one_scene_out(terms_of(keep), x, y, scenes, options);
-    while (cv.valid) {
-      int best = -1;
-      CrossValidation best_cv = cv;
-      for (std::size_t j = 0; j < present.size(); ++j) {
-        if (keep[j]) continue;
-        std::vector<bool> trial = keep;
-        trial[j] = true;
-        const CrossValidation c = leave_one_scene_out(terms_of(trial), x, y, scenes, options);
-        if (c.valid && c.mape < best_cv.mape) {
-          best_cv = c;
-          best = static_cast<int>(j);
-        }
-      }
-      if (best < 0) break;
-      keep[static_cast<std::size_t>(best)] = true;
-      cv = best_cv;
+    while (cv.valid && step(true)) {
     }
   }
   const std::vector<std::string> terms = terms_of(keep);
