@@ -43,10 +43,9 @@ struct SceneFeatures {
 /// face and edge terms averaged over orientations; Cauchy: the mean projection of a planar convex
 /// curve on a random axis is P/4, of a unit normal's component 1/2). P is taken as an equilateral
 /// triangle's, √(12√3·A) ≈ 4.56·√A, so that one pass needs one square root per triangle; thin
-/// triangles then count as compact ones. N + this is 0.6–1.3 times the references the grids
-/// count (clipped placement, scaled to their density d by d·P/h and d²·A/h²; cost_runs.csv at
-/// 3150e8c, 25 scene and density pairs), lowest on walls and grass blades. 0 for a scene without
-/// triangles or extent.
+/// triangles (the equilateral's is the least perimeter for an area) then count for fewer cells than
+/// they meet. N + this is within 0.75–1.25 of the references grid:d=1 places on a sphere, a soup
+/// and a sphereflake (test_build_time_model.cpp). 0 for a scene without triangles or extent.
 double spread_references(const SceneFeatures& f);
 
 /// Features by scene spec, as a fit's rows name their scenes: nullopt for a scene that cannot be
