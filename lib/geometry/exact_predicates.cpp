@@ -523,14 +523,36 @@ double ExactContactClassifier::first_t() const {
 
 namespace {
 
-/// A direction in the projection plane, exact.
+/// A direction in the projection plane, exact (CGAL::Mpzf: the projection below needs no division).
 struct Dir2 {
-  ExactRational x, y;
+  CGAL::Mpzf x, y;
 };
-ExactRational cross2(const Dir2& a, const Dir2& b) { return a.x * b.y - a.y * b.x; }
+CGAL::Mpzf cross2(const Dir2& a, const Dir2& b) { return a.x * b.y - a.y * b.x; }
 bool same_direction(const Dir2& a, const Dir2& b) {
-  return CGAL::is_zero(cross2(a, b)) && CGAL::is_positive(a.x * b.x + a.y * b.y);
+  return CGAL::is_zero(cross2(a, b)) && (a.x * b.x + a.y * b.y).sign() > 0;
 }
+
+/// Projection along a ray's direction d, scaled by d_kz (kz its largest axis): q -> (d_kz·(q_kx -
+/// o_kx) - d_kx·(q_kz - o_kz), d_kz·(q_ky - o_ky) - d_ky·(q_kz - o_kz)), where every point of the ray
+/// projects to 0. The scale multiplies every cross and dot product of projected directions by
+/// d_kz² > 0, so their signs, all that is read, are those of the unscaled projection; without a
+/// division the projection is exact in Mpzf.
+class RayProjection {
+ public:
+  explicit RayProjection(const Ray& r)
+      : kz_(max_abs_axis(r.dir)), kx_((kz_ + 1) % 3), ky_((kz_ + 2) % 3), dx_(double(r.dir[kx_])),
+        dy_(double(r.dir[ky_])), dz_(double(r.dir[kz_])), ox_(double(r.org[kx_])), oy_(double(r.org[ky_])),
+        oz_(double(r.org[kz_])) {}
+
+  Dir2 operator()(const Vec3f& q) const {
+    const CGAL::Mpzf z = CGAL::Mpzf(double(q[kz_])) - oz_;
+    return Dir2{dz_ * (CGAL::Mpzf(double(q[kx_])) - ox_) - dx_ * z, dz_ * (CGAL::Mpzf(double(q[ky_])) - oy_) - dy_ * z};
+  }
+
+ private:
+  int kz_, kx_, ky_;
+  CGAL::Mpzf dx_, dy_, dz_, ox_, oy_, oz_;
+};
 
 /// A closed angular sector at the contact point, counter-clockwise from `s` to `e`; a
 /// half-plane (angle π) when `half`.
@@ -538,8 +560,8 @@ struct Sector {
   Dir2 s, e;
   bool half;
   bool strictly_contains(const Dir2& v) const {
-    if (!CGAL::is_positive(cross2(s, v))) return false;
-    return half || CGAL::is_positive(cross2(v, e));
+    if (cross2(s, v).sign() <= 0) return false;
+    return half || cross2(v, e).sign() > 0;
   }
 };
 
@@ -568,24 +590,15 @@ Contact ExactContactClassifier::contact() const {
   if (compare_fallback_times(s.best_t, FallbackTime(Fraction{CGAL::Mpzf(double(s.ray.tmin)), CGAL::Mpzf(1.0)})) == 0)
     return Contact::on_surface;
   if (s.tied_transversal_sphere) return Contact::crossing;
-  // Project along d: q -> (q_kx - (d_kx/d_kz)·q_kz, q_ky - (d_ky/d_kz)·q_kz), relative to the
-  // ray's own projection (every point of the ray projects to the origin's).
-  const int kz = max_abs_axis(s.ray.dir), kx = (kz + 1) % 3, ky = (kz + 2) % 3;
-  const ExactRational sx = ExactRational(double(s.ray.dir[kx])) / ExactRational(double(s.ray.dir[kz]));
-  const ExactRational sy = ExactRational(double(s.ray.dir[ky])) / ExactRational(double(s.ray.dir[kz]));
-  auto project = [&](const Vec3f& q) {
-    const ExactRational z = ExactRational(double(q[kz])) - ExactRational(double(s.ray.org[kz]));
-    return Dir2{ExactRational(double(q[kx])) - ExactRational(double(s.ray.org[kx])) - sx * z,
-                ExactRational(double(q[ky])) - ExactRational(double(s.ray.org[ky])) - sy * z};
-  };
+  const RayProjection project(s.ray);
   auto minus = [](const Dir2& a, const Dir2& b) { return Dir2{a.x - b.x, a.y - b.y}; };
   std::vector<Sector> sectors;
   for (const auto& tri : s.tied_triangles) {
     const Dir2 a = project(tri[0]), b = project(tri[1]), c = project(tri[2]);
-    const int sigma = CGAL::sign(cross2(minus(b, a), minus(c, a)));
+    const int sigma = cross2(minus(b, a), minus(c, a)).sign();
     if (sigma == 0) continue;  // the ray lies in the triangle's plane: it covers no neighbourhood
     // Sides of the ray's projection (the origin 0) relative to the edges, positive inside.
-    const Dir2 zero{ExactRational(0), ExactRational(0)};
+    const Dir2 zero{CGAL::Mpzf(0.0), CGAL::Mpzf(0.0)};
     const Dir2 v[3] = {a, b, c};
     int on_edge[3], zeros = 0;
     for (int i = 0; i < 3; ++i) {
