@@ -274,6 +274,9 @@ class CostModelExperiment {
   /// kDriftMaxPrimitives triangles, spread over the case order) measured again just before the
   /// held-out scenes, as the sweep measured them; each one's fastest pass now over then.
   void measure_drift(const std::vector<RunRecord>& measured) {
+    // As the plan of this mode timed its cases (a data set from --runs: the same plan's, presumably).
+    const double seconds_per_case =
+        load_plan(opt_.full() ? "full" : "quick").seconds_per_case.value_or(TimingOptions{}.min_seconds);
     std::vector<const RunRecord*> pool;
     for (const RunRecord& r : measured)
       if (r.replicate == 0 && r.threads == 1 && r.primitives <= kDriftMaxPrimitives) pool.push_back(&r);
@@ -286,6 +289,7 @@ class CostModelExperiment {
       const BuiltStructure built = build_structure(then.accel, sc, 1, kSweepBuildPasses, kSweepBuildSeconds);
       TimingOptions timing;
       timing.any_hit = is_any_hit_ray_spec(then.rays);
+      timing.min_seconds = seconds_per_case;
       const RunRecord now = measure_case({then.case_number, then.scene, then.accel, then.rays}, *sc, built, *embree,
                                          make_ray_set(then.rays, sc), timing);
       drift_cases_.push_back({then, now});

@@ -124,6 +124,9 @@ TEST(CostPlan, BadPlanKeysGiveOneLineErrors) {
        "unknown key 'every'"},
       {R"({"scenes": ["soup:n=10"], "accels": ["bvh"], "sample_seed": -1, )" + rays + "}", "sample_seed"},
       {R"({"scenes": ["soup:n=10", {"scene": "soup:n=10"}], "accels": ["bvh"], )" + rays + "}", "listed twice"},
+      {R"({"scenes": ["soup:n=10"], "accels": ["bvh"], "seconds_per_case": 0, )" + rays + "}", "seconds_per_case"},
+      {R"({"scenes": ["soup:n=10"], "accels": ["bvh"], "seconds_per_case": 11, )" + rays + "}", "seconds_per_case"},
+      {R"({"scenes": ["soup:n=10"], "accels": ["bvh"], "seconds_per_case": "0.1", )" + rays + "}", "seconds_per_case"},
   };
   for (const auto& [text, expected] : bad) {
     try {
@@ -135,6 +138,22 @@ TEST(CostPlan, BadPlanKeysGiveOneLineErrors) {
       EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     }
   }
+}
+
+TEST(CostPlan, ItsSecondsPerCaseSetHowLongEachCaseIsTimed) {
+  const auto passes = [](const std::string& seconds) {
+    const SweepPlan plan = load_plan(plan_file(R"({"scenes": ["sphere:n=64"], "accels": ["bvh"], "rays": ["primary:16"])" +
+                                               seconds + "}"));
+    SweepOptions o;
+    o.out = scratch("seconds_per_case.csv").string();
+    o.timing.min_seconds = 0;
+    fs::remove(o.out);
+    run_sweep(plan, o);
+    const std::vector<RunRecord> rows = read_runs_csv(o.out);
+    return rows.empty() ? 0 : rows.front().passes;
+  };
+  EXPECT_EQ(passes(""), TimingOptions{}.min_passes);  // the options' 0 s: the fewest passes
+  EXPECT_GT(passes(R"(, "seconds_per_case": 0.02)"), TimingOptions{}.min_passes);  // 16 rays take ~1 µs
 }
 
 TEST(CostPlan, TheShippedPlansSpanTheirScaleWithReplicates) {

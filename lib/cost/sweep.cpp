@@ -235,11 +235,12 @@ SweepPlan load_plan(const std::string& name_or_path) {
   }
   if (!j.is_object()) throw InputError(path + ": a plan is a JSON object with keys scenes, accels, rays");
   static const std::set<std::string> kKeys = {"scenes", "accels", "rays", "description", "accels_per_scene",
-                                              "sample_seed", "replicates"};
+                                              "sample_seed", "replicates", "seconds_per_case"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!kKeys.count(it.key()))
       throw InputError(path + ": unknown key '" + it.key() +
-                       "' (valid: scenes, accels, rays, description, accels_per_scene, sample_seed, replicates)");
+                       "' (valid: scenes, accels, rays, description, accels_per_scene, sample_seed, replicates, "
+                       "seconds_per_case)");
   for (const char* key : kListKeys)
     if (!j.contains(key)) throw InputError(path + ": missing key '" + std::string(key) + "'");
   SweepPlan plan;
@@ -251,6 +252,12 @@ SweepPlan load_plan(const std::string& name_or_path) {
   if (j.contains("sample_seed")) {
     if (!j["sample_seed"].is_number_unsigned()) throw InputError(path + ": sample_seed: expected a non-negative integer");
     seed = j["sample_seed"].get<std::uint64_t>();
+  }
+  if (j.contains("seconds_per_case")) {
+    const auto& t = j["seconds_per_case"];
+    if (!t.is_number() || !(t.get<double>() > 0.0 && t.get<double>() <= 10.0))
+      throw InputError(path + ": seconds_per_case: expected a number of seconds in (0, 10]");
+    plan.seconds_per_case = t.get<double>();
   }
   std::size_t per_scene = 0;  // 0: every accel
   if (j.contains("accels_per_scene")) per_scene = read_count(j["accels_per_scene"], path + ": accels_per_scene", plan.accels.size());
@@ -472,6 +479,7 @@ SweepSummary run_sweep(const SweepPlan& plan, const SweepOptions& options) {
   BuiltStructure built;
   TimingOptions timing = options.timing;
   timing.threads = options.threads;
+  if (plan.seconds_per_case) timing.min_seconds = *plan.seconds_per_case;
   try {
     for (std::size_t k = 0; k < todo.size(); ++k) {
       const SweepCase c = plan.case_at(todo[k]);

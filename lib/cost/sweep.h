@@ -7,7 +7,8 @@
 ///    "rays": [SPEC, ...],
 ///    "accels_per_scene": K,                          (optional; default: every accel)
 ///    "sample_seed": S,                               (optional; default 1)
-///    "replicates": {"fraction": F, "repeats": R}}    (optional; default: none)
+///    "replicates": {"fraction": F, "repeats": R},    (optional; default: none)
+///    "seconds_per_case": T}                          (optional; default: SweepOptions::timing's, 0.1 s)
 ///
 /// of the lab's spec strings. Every key but scenes, accels and rays is optional, so a plan of
 /// plain lists (the first format) reads as before, with the same case numbers.
@@ -41,6 +42,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,6 +70,9 @@ struct SweepPlan {
   /// The primary case numbers measured again, ascending, each `replicate_repeats` times.
   std::vector<std::int64_t> replicated;
   std::int64_t replicate_repeats = 1;
+  /// When set, each case's passes run until ours have taken this long in total, at least
+  /// TimingOptions::min_passes of them (TimingOptions::min_seconds; unset: the sweep's options').
+  std::optional<double> seconds_per_case;
 
   /// The accels of scene `s`, as indices into `accels`.
   std::vector<std::size_t> accels_of(std::size_t s) const;
