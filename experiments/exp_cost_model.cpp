@@ -274,7 +274,7 @@ class CostModelExperiment {
   /// kDriftMaxPrimitives triangles, spread over the case order) measured again just before the
   /// held-out scenes, as the sweep measured them; each one's fastest pass now over then.
   void measure_drift(const std::vector<RunRecord>& measured) {
-    // As the plan of this mode timed its cases (a data set from --runs: the same plan's, presumably).
+    // Timed as this mode's plan times its cases (a data set given by --runs: as that plan would).
     const double seconds_per_case =
         load_plan(opt_.full() ? "full" : "quick").seconds_per_case.value_or(TimingOptions{}.min_seconds);
     std::vector<const RunRecord*> pool;
