@@ -747,11 +747,10 @@ int main(int argc, char** argv) {
               "references per primitive | floor s [95%] | build / floor [95%] | floor s, 4 KiB pages [95%] | build / that "
               "floor [95%] | count + scatter floor s [95%] | build / that floor [95%] | find cells s [95%] | rounds |\n"
               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-        std::vector<Case> build_cases = {big, cases[1], cases[2]};
-        if (full) {
-          build_cases.push_back({"bunny 1.2M", "subdivided:of=cgal:bunny00,levels=2", make_scene("subdivided:of=cgal:bunny00,levels=2"), {}});
-          build_cases.push_back({"armadillo", "cgal:armadillo", make_scene("cgal:armadillo"), {}});
-        }
+        const std::vector<Case> build_cases = {
+            big, cases[1], cases[2],
+            {"bunny 1.2M", "subdivided:of=cgal:bunny00,levels=2", make_scene("subdivided:of=cgal:bunny00,levels=2"), {}},
+            {"armadillo", "cgal:armadillo", make_scene("cgal:armadillo"), {}}};
         for (const Case& c : build_cases)
           for (const std::string place : {"bbox", "clipped"})
             for (const double d : {3.0, 1.0}) {
