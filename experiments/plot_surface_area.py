@@ -26,7 +26,12 @@ def plot(out: pathlib.Path) -> None:
         for q, m in markers.items():
             g = geo[(geo["accel"] == accel) & (geo["quantity"] == q)]
             ax.errorbar(g["predicted"], g["measured"], yerr=2 * g["std_error"], fmt=m, color=cmap(i), markersize=4,
-                        linestyle="none", label=f"{accel}: {q}")
+                        linestyle="none")
+    # One legend entry per structure (colour) and per quantity (marker), not per pair: at most 12.
+    for i, accel in enumerate(accels):
+        ax.plot([], [], color=cmap(i), marker="o", markersize=4, linestyle="none", label=accel)
+    for q, m in markers.items():
+        ax.plot([], [], color="grey", marker=m, markersize=4, linestyle="none", label=q)
     lo = max(0.5, geo[["predicted", "measured"]].min().min() / 1.5)
     hi = geo[["predicted", "measured"]].max().max() * 1.5
     ax.plot([lo, hi], [lo, hi], color="black", linewidth=0.8, label="measured = predicted")
