@@ -231,10 +231,18 @@ struct CertifiedKernel {
     if (hi < c.ray.tmin || lo > c.ray.tmax || (c.has && double(lo) > c.hi)) return false;
     if (!(lo >= c.ray.tmin && hi <= c.ray.tmax) || (c.has && !(double(hi) < c.lo)))
       return decide_triangle(c, prim, p0, p1, p2, U, V, W, B, az, bz, cz, hit);
+    install_crossing(c, prim, p0, p1, p2, U, V, W, lo, hi, t, hit);
+    return true;
+  }
+
+  /// Makes the triangle the first hit, at an exact t in [lo, hi] ⊂ [tmin, tmax] with hi before
+  /// the current first hit's lower bound (decide_crossing's certified case), with the estimate
+  /// `t` and the barycentrics of its edge functions U, V, W.
+  static void install_crossing(Context& c, unsigned prim, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, float U,
+                               float V, float W, float lo, float hi, float t, TriangleHit& hit) {
     const float inv_det = 1.0f / (U + V + W);
     install(c, prim, Interval{lo, hi}, TriangleHit{t, V * inv_det, W * inv_det}, triangle(p0, p1, p2), false, false);
     hit = c.best;
-    return true;
   }
 
   /// The rest of intersect() for a triangle the float filter did not reject: U, V, W are the
