@@ -185,8 +185,9 @@ struct PacketKernel<CertifiedKernel> {
     if (open == 0) return -1;
     // Most packets the cull leaves open hold one lane, a crossing its enclosure certifies (an
     // occluder, or a closest hit before the current one). Inline, this took the certified 8-wide
-    // BVH from 1.09-1.12x the watertight kernel's time to 1.01-1.08x on the elephant moved 10^4
-    // from the origin (bench_bvh, primary, diffuse and shadow rays, 3 processes each).
+    // BVH from 1.09-1.13x the watertight kernel's time to 1.02-1.09x on the elephant moved 10^4
+    // from the origin, and from 1.08-1.14x to 1.01-1.13x on the camel (bench_bvh, primary,
+    // diffuse and shadow rays, medians of 5 processes each).
     if (!c.cull) return decide_open_lanes<kAnyHit, kLanes>(c, p, U, V, W, B, az0, bz0, cz0, open, nullptr, hit);
     const DepthCull<kLanes> d(c, r, U, V, W, B, az0, bz0, cz0, open);
     if (d.open == 0) return -1;
