@@ -310,6 +310,33 @@ TEST(GridDda, RaysFromFarAwayAreWalkedFromWhereTheyEnterTheGrid) {
   }
 }
 
+// A ray outside the x slab and parallel to it (d.x = 0), whose z distances overflow (d.z = 2e-38,
+// a normal float, its inverse 5e37): the slab test enters the box at t0 = +inf, where the entry
+// point o + t0·d is NaN on x. The 3D-DDA walked from there (UndefinedBehaviorSanitizer: a NaN cell
+// index; found by fuzz_build_trace). It reaches the box at no finite t and misses, as the oracle
+// says.
+TEST(GridDda, ARayThatEntersTheBoxOnlyAtInfinityMisses) {
+  const auto scene = make_scene("soup:n=200");
+  const Bounds3f b = scene->bounds();
+  const Vec3f c = b.center(), d = b.diagonal();
+  std::vector<Ray> rays;
+  for (const float side : {-1.0f, 1.0f}) {
+    Ray r;
+    r.org = {c.x + side * (d.x + 1.0f), c.y, b.lo.z - 10.0f - d.z};
+    r.dir = {side > 0.0f ? -0.0f : 0.0f, 0.0f, 2e-38f};
+    rays.push_back(r);
+  }
+  const auto oracle = make_accelerator("exact", scene);
+  ASSERT_EQ(trace_rays(*oracle, rays, TraceOptions{1, false, false}).hit_count, 0u);
+  for (const auto& spec : kGridSpecs)
+    for (const std::string kernel : {"", "kernel=watertight"}) {
+      const std::string accel = kernel.empty() ? spec : spec + (spec.find(':') == std::string::npos ? ":" : ",") + kernel;
+      const auto grid = make_accelerator(accel, scene);
+      EXPECT_EQ(trace_rays(*grid, rays, TraceOptions{1, true, false}).hit_count, 0u) << accel;
+      EXPECT_EQ(trace_rays(*grid, rays, TraceOptions{1, true, true}).hit_count, 0u) << accel << " (any hit)";
+    }
+}
+
 // A scene far from the world origin is placed and walked in a frame near it (grid_frame.h): the
 // frame's translation is exact, and its grids hold about as many references as the same scene's
 // at the origin. In the world frame the placement margin, 2^-16 of the coordinates' magnitude,

@@ -12,7 +12,11 @@ namespace raylab {
 
 /// Calls `visit(cell_index, t_enter, t_exit)` for the cells of `g` the ray o + t·d pierces for t
 /// in [t0, t1] (t0 <= t1, both inside the grid's slab interval), in order, until `visit`
-/// returns true; returns whether it did.
+/// returns true; returns whether it did. A ray whose slab interval starts at t0 = +inf reaches
+/// the grid at no finite t (its origin lies outside a slab it runs parallel to, while another
+/// slab's distances overflow, as intersect_box reports them for a direction component near
+/// 2^-126): it pierces no cell, and the entry point o + t0·d, NaN on its parallel axis, is never
+/// formed.
 ///
 /// The intervals partition [t0, t1]: each cell's t_exit is the next cell's t_enter, so every
 /// t in [t0, t1] lies in some visited cell's closed interval. A zero direction component (±0)
@@ -24,6 +28,7 @@ template <class Visit>
 inline bool grid_dda(const GridGeometry& g, const Vec3f& org, const Vec3f& dir, const Vec3f& inv_dir, float t0, float t1,
                      Visit&& visit) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
+  if (!(t0 < kInf)) return false;
   int cell[3], step[3], out[3];
   float next[3];
   for (int a = 0; a < 3; ++a) {
