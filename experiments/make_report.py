@@ -448,6 +448,15 @@ def results_json(verdicts, numbers, machine, noise_floor, revision) -> dict:
             "claims": [claim_entry(v) for v in verdicts], "numbers": numbers}
 
 
+def draw_figures(out: pathlib.Path) -> None:
+    """Every experiments/plot_*.py draws its figures from the CSVs in `out`, into `out`."""
+    for module_path in sorted(pathlib.Path(__file__).parent.glob("plot_*.py")):
+        spec = importlib.util.spec_from_file_location(module_path.stem, module_path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        module.plot(out)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description="Builds the plots, docs/results/README.md and results.json.")
     parser.add_argument("results_dir")
@@ -461,11 +470,7 @@ def main() -> int:
     if not out.is_dir():
         print(f"make_report.py: error: {out} is not a directory", file=sys.stderr)
         return 2
-    for module_path in sorted(pathlib.Path(__file__).parent.glob("plot_*.py")):
-        spec = importlib.util.spec_from_file_location(module_path.stem, module_path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        module.plot(out)
+    draw_figures(out)
     fragments = {p.stem: p for p in out.glob("*.md") if p.name != "README.md"}
     names = [n for n in dict.fromkeys(ORDER) if n in fragments] + sorted(n for n in fragments if n not in ORDER)
     texts = {n: fragments[n].read_text().rstrip() for n in names}

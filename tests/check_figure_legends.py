@@ -1,12 +1,12 @@
 #!/usr/bin/python3
-"""The report's figures keep at most 12 entries in each legend (issue 30): every
-experiments/plot_*.py draws into a copy of a results directory while Figure.savefig notes the
-entries of each legend on the figure it saves (the figure's own and its axes').
+"""The report's figures keep at most 12 entries in each legend (issue 30): make_report.py's
+draw_figures (every experiments/plot_*.py) draws into a copy of a results directory while
+Figure.savefig notes the entries of each legend on the figure it saves (the figure's own and its
+axes').
 
     tests/check_figure_legends.py docs/results
 
 prints one line per figure over the limit and exits 1 if there is one, 2 on unusable input."""
-import importlib.util
 import pathlib
 import shutil
 import sys
@@ -18,7 +18,9 @@ matplotlib.use("Agg")
 import matplotlib.figure  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "experiments"))  # the plot scripts' shared modules (figures.py, ...)
+sys.path.insert(0, str(ROOT / "experiments"))
+import make_report  # noqa: E402
+
 MAX_ENTRIES = 12
 
 
@@ -43,11 +45,7 @@ def draw_all(results_dir):
         shutil.copytree(results_dir, copy)
         matplotlib.figure.Figure.savefig = counting_save
         try:
-            for path in sorted((ROOT / "experiments").glob("plot_*.py")):
-                spec = importlib.util.spec_from_file_location(path.stem, path)
-                module = importlib.util.module_from_spec(spec)
-                spec.loader.exec_module(module)
-                module.plot(copy)
+            make_report.draw_figures(copy)
         finally:
             matplotlib.figure.Figure.savefig = save
     return drawn
