@@ -14,6 +14,7 @@
 #include "accel/grid/uniform_grid.h"
 #include "accel/nested_grid/nested_grid.h"
 #include "geometry/input_error.h"
+#include "geometry/spec_string.h"
 #include "scene/scene_spec.h"
 
 namespace raylab {
@@ -330,7 +331,7 @@ TEST(GridDda, ARayThatEntersTheBoxOnlyAtInfinityMisses) {
   ASSERT_EQ(trace_rays(*oracle, rays, TraceOptions{1, false, false}).hit_count, 0u);
   for (const auto& spec : kGridSpecs)
     for (const std::string kernel : {"", "kernel=watertight"}) {
-      const std::string accel = kernel.empty() ? spec : spec + (spec.find(':') == std::string::npos ? ":" : ",") + kernel;
+      const std::string accel = kernel.empty() ? spec : with_param(spec, kernel);
       const auto grid = make_accelerator(accel, scene);
       EXPECT_EQ(trace_rays(*grid, rays, TraceOptions{1, true, false}).hit_count, 0u) << accel;
       EXPECT_EQ(trace_rays(*grid, rays, TraceOptions{1, true, true}).hit_count, 0u) << accel << " (any hit)";
