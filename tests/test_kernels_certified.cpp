@@ -233,8 +233,8 @@ TEST(CertifiedKernel, RaysStartingOnALargeTriangleGetTheExactFirstHit) {
         const double lift = k % 5 == 0 ? 1e-3 : 0.1 + rng.uniform();
         const Vec3d w = normalize(tangent + n * (side * lift));
         Vec3f org = on;
-        if (kind == 0) org = offset_ray_origin(on, Vec3f(n * side));
-        if (kind == 1) org = offset_ray_origin(on, Vec3f(n * -side));
+        if (kind == 0) org = offset_ray_origin(on, Vec3f(n * side), float(20.0 * scale));
+        if (kind == 1) org = offset_ray_origin(on, Vec3f(n * -side), float(20.0 * scale));
         const Tri before{corner(), corner(), corner()}, after{corner(), corner(), corner()};
         const std::vector<Tri> tris = {before, big, after};
         const Ray ray{org, Vec3f(w), 0.0f, k % 3 == 0 ? float(5.0 * scale) : INFINITY};

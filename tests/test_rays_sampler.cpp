@@ -204,6 +204,31 @@ TEST(RaysGenerators, SurfaceRaysLeaveTheVisibleSide) {
   }
 }
 
+// Surface rays leave a scene and its copy scaled by a power of two (exactly representable, so
+// every coordinate scales without rounding) from the same points, scaled: the offset off the
+// surface scales with the scene (offset_ray.h). With Wächter and Binder's fixed near-origin offset
+// of 1/65536, the cube's faces at coordinate 0 put the scaled copies' origins elsewhere.
+TEST(RaysGenerators, SurfaceRaysScaleWithTheScene) {
+  const Scene unit = cube_scene();
+  const auto unit_trace = tracer(unit);
+  for (const float k : {0x1p-14f, 0x1p14f}) {
+    Scene scaled;
+    scaled.spec = "test-cube-scaled";
+    scaled.mesh = box_mesh({0, 0, 0}, {k, k, k});
+    const auto scaled_trace = tracer(scaled);
+    for (const char* spec : {"diffuse:300", "ao:300", "shadow:300", "diffuse:300,camera=inside"}) {
+      const auto a = generate_rays(spec, unit, unit_trace), b = generate_rays(spec, scaled, scaled_trace);
+      ASSERT_EQ(a.size(), b.size()) << spec;
+      const bool direction_scales = std::string(spec).starts_with("shadow");
+      for (std::size_t i = 0; i < a.size(); ++i)
+        for (int axis = 0; axis < 3; ++axis) {
+          ASSERT_EQ(b[i].org[axis], a[i].org[axis] * k) << spec << ", scale " << k << ", ray " << i << ", axis " << axis;
+          ASSERT_EQ(b[i].dir[axis], direction_scales ? a[i].dir[axis] * k : a[i].dir[axis]) << spec << ", ray " << i;
+        }
+    }
+  }
+}
+
 TEST(RaysGenerators, EdgeAndVertexRaysHitAClosedMeshWatertight) {
   const Scene scene = cube_scene();
   for (const char* spec : {"edges:2000", "vertices:2000"}) {

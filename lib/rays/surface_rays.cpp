@@ -95,11 +95,12 @@ std::vector<Ray> surface_rays(SurfaceRayKind kind, const Scene& scene, const Cam
   if (points.empty()) return rays;
   rays.reserve(n);
   const Bounds3f bounds = scene.bounds();
-  const float ao_tmax = static_cast<float>(0.1 * length(Vec3d(bounds.diagonal())));
+  const double diagonal = length(Vec3d(bounds.diagonal()));
+  const float ao_tmax = static_cast<float>(0.1 * diagonal);
   constexpr float kInf = std::numeric_limits<float>::infinity();
   Rng rng(seed);
   for (const SurfacePoint& sp : points) {
-    const Vec3f org = offset_ray_origin(sp.p, sp.n);
+    const Vec3f org = offset_ray_origin(sp.p, sp.n, static_cast<float>(diagonal));
     const double u1 = rng.uniform(), u2 = rng.uniform();
     switch (kind) {
       case SurfaceRayKind::diffuse:
