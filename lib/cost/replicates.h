@@ -46,6 +46,9 @@ struct IntervalEstimate {
 /// The median of `values` (NaN for none).
 double median(std::vector<double> values);
 
+/// The 90% quantile of `values` by nearest rank (the ⌈0.9·n⌉-th smallest; NaN for none).
+double quantile90(std::vector<double> values);
+
 /// Standard deviation over mean (sample standard deviation, n − 1); NaN for fewer than two values
 /// or a zero mean.
 double coefficient_of_variation(const std::vector<double>& values);

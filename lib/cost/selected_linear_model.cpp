@@ -7,6 +7,7 @@
 #include <set>
 
 #include "cost/cost_model.h"
+#include "cost/replicates.h"
 #include "geometry/input_error.h"
 
 namespace raylab {
@@ -18,15 +19,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kReweightingRounds = 4;
 /// A prediction below this fraction of its measurement weighs as if it were this fraction.
 constexpr double kLeastPredictedFraction = 0.1;
-
-/// The 90% quantile (nearest rank) of `v`; NaN when empty.
-double quantile90(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const std::size_t rank = static_cast<std::size_t>(std::ceil(0.9 * static_cast<double>(v.size())));
-  const auto at = v.begin() + static_cast<std::ptrdiff_t>(std::max<std::size_t>(rank, 1) - 1);
-  std::nth_element(v.begin(), at, v.end());
-  return *at;
-}
 
 double log_residual(double predicted, double measured) {
   return std::abs(std::log(std::max(predicted, 1e-300) / measured));
