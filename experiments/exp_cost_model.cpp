@@ -811,8 +811,9 @@ class CostModelExperiment {
     md += fmt::format(
         "\n`auto` within 10% of the best candidate's build + trace by the intervals: **{} of {} cases ({})**; beyond "
         "it: {}; not shown at this noise: {}; goal ≥ 90% within: {}. Method: {} (\"predicted\": chosen from the "
-        "scene's features, the build-time and scene-level models, before any build; \"built-all\": every candidate "
-        "built). *built* is the first round's; *choose s* the median over the rounds.\n\n",
+        "scene's features, the build-time model and the spec effects on trace time, before any build; "
+        "\"built-all\": every candidate built). *built* is the first round's; *choose s* the median over the "
+        "rounds.\n\n",
         within, total, pct(total ? double(within) / total : 0.0), beyond, total - within - beyond,
         total && within >= 0.9 * total ? "met" : "not met",
         auto_totals_.empty() ? std::string("none") : auto_totals_.front().choice.method);

@@ -18,6 +18,7 @@
 #include "accel/common/hit_comparison.h"
 #include "accel/common/ray_sets.h"
 #include "accel/common/tracer.h"
+#include "cost/accel_spec_key.h"
 #include "cost/auto_accel.h"
 #include "cost/model_file.h"
 #include "cost/sweep.h"
@@ -127,6 +128,37 @@ TEST(AutoAccel, ModelFileHasTheBuildAndSceneLevelModels) {
     EXPECT_EQ(set.scene_trace.at(spec).count("bounce"), 1u) << spec;
     EXPECT_EQ(set.scene_trace.at(spec).count("occlusion"), 0u) << spec;  // no shadow rays in the plan
   }
+}
+
+// Every candidate the tiny model has a spec effect for is predicted as exp(a + b̂), one b̂ for
+// the scene (spec_trace_effects.h): two candidates' predictions differ by exp(a1 - a2), what the
+// paired measurements say, whatever their own scene-level models predict for this scene.
+TEST(AutoAccel, CandidatesAreRankedByTheirSpecEffects) {
+  const CostModelSet set = read_model_file(tiny_model());
+  std::map<std::string, double> bounce_effect;  // by canonical spec
+  for (const char* spec : {"bvh", "grid:d=1", "kdtree"}) {
+    ASSERT_EQ(set.trace_effects.by_spec.count(spec), 1u) << spec;
+    const SpecTraceEffect& e = set.trace_effects.by_spec.at(spec).at("bounce");
+    EXPECT_EQ(e.scenes, 4u) << spec;
+    bounce_effect[canonical_accel_spec(spec)] = e.effect;
+  }
+  const auto accel = make_accelerator("auto:model=" + tiny_model() + ",rays=diffuse", make_scene("soup:n=2500"));
+  const AutoChoice& c = choice_of(*accel);
+  const AutoCandidate* first = nullptr;
+  std::size_t predicted = 0;
+  for (const AutoCandidate& k : c.candidates) {
+    if (!k.skipped.empty()) continue;
+    ++predicted;
+    EXPECT_EQ(k.trace_model, "effects") << k.spec;
+    if (!first) {
+      first = &k;
+      continue;
+    }
+    const double expected = std::exp(bounce_effect.at(canonical_accel_spec(k.spec)) -
+                                     bounce_effect.at(canonical_accel_spec(first->spec)));
+    EXPECT_NEAR(k.predicted_ns_per_ray / first->predicted_ns_per_ray, expected, 1e-9 * expected) << k.spec;
+  }
+  EXPECT_EQ(predicted, 3u);
 }
 
 TEST(AutoAccel, ChoosesBeforeBuildingAndBuildsOnlyWhatItChose) {

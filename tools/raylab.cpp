@@ -280,6 +280,7 @@ int run_trace(const TraceCommand& o) {
         e["predicted_build_s"] = k.predicted_build_s;
         e["predicted_total_s"] = k.predicted_total_s;
         e["interval90_total_s"] = {k.total_lo_s, k.total_hi_s};
+        e["trace_model"] = k.trace_model;
       }
       e["built"] = k.built;
       if (std::isfinite(k.measured_build_s)) e["measured_build_s"] = k.measured_build_s;

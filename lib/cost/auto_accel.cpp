@@ -14,8 +14,10 @@
 #include "cost/build_time_model.h"
 #include "cost/cost_model.h"
 #include "cost/model_file.h"
+#include "cost/replicates.h"
 #include "cost/scene_features.h"
 #include "cost/scene_trace_model.h"
+#include "cost/spec_trace_effects.h"
 #include "cost/tree_features.h"
 #include "geometry/input_error.h"
 #include "geometry/input_warning.h"
@@ -182,6 +184,37 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   std::map<std::string, const std::map<std::string, SelectedLinearModel>*> trace_by_key;
   for (const auto& [spec, m] : models.build) build_by_key.emplace(canonical_key(spec), &m);
   for (const auto& [spec, m] : models.scene_trace) trace_by_key.emplace(canonical_key(spec), &m);
+  // The spec effects (spec_trace_effects.h) of at least kAutoEffectMinScenes scenes, and per ray
+  // class the scene's effect b̂: the median vote ln t̂_s - a_s of the specs with a scene-level
+  // model and an effect, with the median of their intervals' half-widths (log units) and their
+  // largest extrapolation factor.
+  std::map<std::string, const std::map<std::string, SpecTraceEffect>*> effect_by_key;
+  for (const auto& [spec, m] : models.trace_effects.by_spec) effect_by_key.emplace(canonical_key(spec), &m);
+  auto effect_of = [&](const std::string& key, const std::string& cls) -> const SpecTraceEffect* {
+    const auto e = effect_by_key.find(key);
+    if (key.empty() || e == effect_by_key.end()) return nullptr;
+    const auto c = e->second->find(cls);
+    return c != e->second->end() && c->second.scenes >= kAutoEffectMinScenes ? &c->second : nullptr;
+  };
+  struct SceneEffect {
+    double b, log_half_width, extrapolation_factor;
+  };
+  std::map<std::string, SceneEffect> scene_effect;
+  for (const std::string& cls : classes) {
+    std::vector<double> votes, half_widths;
+    double extrapolation = 1.0;
+    for (const auto& [key, by_class] : trace_by_key) {
+      const SpecTraceEffect* e = effect_of(key, cls);
+      const auto m = by_class->find(cls);
+      if (!e || m == by_class->end()) continue;
+      const double t = m->second.predict(trace_x);
+      if (!(t > 0) || !std::isfinite(t)) continue;  // a linear model can predict no time at all
+      votes.push_back(std::log(t) - e->effect);
+      half_widths.push_back(std::log(m->second.interval90(trace_x, sf.primitives).second / t));
+      extrapolation = std::max(extrapolation, m->second.extrapolation_factor(sf.primitives));
+    }
+    if (!votes.empty()) scene_effect[cls] = {median(votes), median(half_widths), extrapolation};
+  }
   std::vector<AutoCandidate> candidates;
   std::vector<std::pair<double, double>> upper;  // each candidate's 90% upper build s and ns per ray
   std::vector<std::size_t> ranked;  // predicted candidates, best first
@@ -197,21 +230,30 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
       c.skipped = "more than " + std::to_string(kAutoBspMaxPrimitives) + " primitives";
     } else if (!build) {
       c.skipped = "the model has no build-time model of this spec";
-    } else if (!trace) {
-      c.skipped = "the model has no scene-level trace model of this spec";
     } else {
       double ns = 0, ns_lo = 0, ns_hi = 0;
       for (const std::string& cls : classes) {
-        const auto it = trace->find(cls);
-        if (it == trace->end()) {
+        const double share = 1.0 / static_cast<double>(classes.size());
+        const SpecTraceEffect* e = effect_of(key, cls);
+        const auto scene_it = scene_effect.find(cls);
+        if (e && scene_it != scene_effect.end()) {
+          // exp(a + b̂), its interval the two spreads added in quadrature.
+          const SceneEffect& b = scene_it->second;
+          const double t = std::exp(e->effect + b.b), q = std::hypot(e->log_q90, b.log_half_width);
+          c.extrapolation_factor = std::max(c.extrapolation_factor, b.extrapolation_factor);
+          ns += share * t, ns_lo += share * t * std::exp(-q), ns_hi += share * t * std::exp(q);
+          if (c.trace_model.empty()) c.trace_model = "effects";
+          continue;
+        }
+        const auto own = trace ? trace->find(cls) : std::map<std::string, SelectedLinearModel>::const_iterator{};
+        if (!trace || own == trace->end()) {
           c.skipped = "the model has no scene-level trace model of this spec for " + cls + " rays";
           break;
         }
-        c.extrapolation_factor = std::max(c.extrapolation_factor, it->second.extrapolation_factor(sf.primitives));
-        const auto [lo, hi] = it->second.interval90(trace_x, sf.primitives);
-        ns += it->second.predict(trace_x) / static_cast<double>(classes.size());
-        ns_lo += lo / static_cast<double>(classes.size());
-        ns_hi += hi / static_cast<double>(classes.size());
+        const auto [lo, hi] = own->second.interval90(trace_x, sf.primitives);
+        c.extrapolation_factor = std::max(c.extrapolation_factor, own->second.extrapolation_factor(sf.primitives));
+        ns += share * own->second.predict(trace_x), ns_lo += share * lo, ns_hi += share * hi;
+        c.trace_model = "scene-level";
       }
       if (c.skipped.empty()) {
         c.extrapolation_factor = std::max(c.extrapolation_factor, build->extrapolation_factor(sf.primitives));

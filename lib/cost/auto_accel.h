@@ -15,7 +15,10 @@
 /// scene_trace_model.h), `auto` chooses BEFORE it builds (`method` "predicted"): from the scene's
 /// features alone (scene_features.h, one O(N) pass) it predicts each candidate's build seconds and
 /// its ns per ray, and keeps the candidate of least predicted build + N × trace time; candidates
-/// the model has no entry for (by accel_spec_key.h) are skipped. It builds that one, then races the
+/// the model has no entry for (by accel_spec_key.h) are skipped. A candidate's ns per ray is
+/// exp(a + b̂) where the model has its spec effect a from at least kAutoEffectMinScenes scenes
+/// (spec_trace_effects.h: b̂ the scene's effect, voted by every scene-level model), else its own
+/// scene-level prediction. It builds that one, then races the
 /// others whose 90% interval of the total overlaps its own, in the order of their predicted totals,
 /// as long as the race's estimated cost (each racer's build and sample passes at the upper ends of
 /// their intervals) stays within kAutoSampleBudget of the best's predicted total: each racer is
@@ -38,6 +41,8 @@
 namespace raylab {
 
 inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
+/// The fewest scenes a spec effect (spec_trace_effects.h) is measured on for `auto` to use it.
+inline constexpr std::size_t kAutoEffectMinScenes = 2;
 /// The rays each racing candidate is timed on (split evenly over the kinds of `mixed`): a
 /// thousandth of the count, within [kAutoSampleRays, kAutoSampleMaxRays].
 inline constexpr std::size_t kAutoSampleRays = 384;
@@ -69,6 +74,9 @@ struct AutoCandidate {
   /// How far the scene's primitives lie outside the range its build-time and trace models were
   /// fitted on (the largest factor, SelectedLinearModel::extrapolation_factor); 1 inside.
   double extrapolation_factor = 1.0;
+  /// How its trace time was predicted: "effects" (spec_trace_effects.h) or "scene-level" (its own
+  /// model, scene_trace_model.h); "scene-level" when any ray class of a mixed choice used its own.
+  std::string trace_model = "";
 };
 
 struct AutoChoice {

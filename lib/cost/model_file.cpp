@@ -240,6 +240,7 @@ void write_model_file(const CostModelSet& set, const std::string& path) {
                   {"families", families}};
   if (!set.build.empty()) j["build"] = build_time_models_json(set.build);
   if (!set.scene_trace.empty()) j["scene_trace"] = scene_trace_models_json(set.scene_trace);
+  if (!set.trace_effects.empty()) j["scene_trace_effects"] = spec_trace_effects_json(set.trace_effects);
   write_file_atomically(path, j.dump(2) + "\n");
 }
 
@@ -310,6 +311,8 @@ CostModelSet read_model_file(const std::string& path_in) {
   }
   if (j.contains("build")) set.build = read_build_time_models(j.at("build"), path + ".build");
   if (j.contains("scene_trace")) set.scene_trace = read_scene_trace_models(j.at("scene_trace"), path + ".scene_trace");
+  if (j.contains("scene_trace_effects"))
+    set.trace_effects = read_spec_trace_effects(j.at("scene_trace_effects"), path + ".scene_trace_effects");
   return set;
 }
 

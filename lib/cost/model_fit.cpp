@@ -291,6 +291,7 @@ CostModelSet fit_cost_model_set(const std::vector<RunRecord>& measured, const Fi
   const SceneFeatureTable features = load_scene_features(scenes, progress);
   set.build = fit_build_time_models(measured, features, options, progress);
   set.scene_trace = fit_scene_trace_models(runs, features, options, progress);
+  set.trace_effects = fit_spec_trace_effects(runs);
   return set;
 }
 

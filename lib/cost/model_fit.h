@@ -34,6 +34,7 @@
 #include "cost/model_selection.h"
 #include "cost/run_record.h"
 #include "cost/scene_trace_model.h"
+#include "cost/spec_trace_effects.h"
 
 namespace raylab {
 
@@ -166,6 +167,9 @@ struct CostModelSet {
   /// builds. Empty in model files written without them (auto then builds every candidate).
   BuildTimeModels build;
   SceneTraceModels scene_trace;
+  /// Each spec's effect on log trace time, the scene's removed (spec_trace_effects.h): how `auto`
+  /// ranks candidates. Empty in files written without them (auto then uses the scene-level models).
+  SpecTraceEffects trace_effects;
 
   /// The model of `family`; throws InputError listing the families the model has.
   const FamilyModel& family(const std::string& name) const;
