@@ -9,6 +9,7 @@
 #include <set>
 #include <nlohmann/json.hpp>
 
+#include "cost/json_reader.h"
 #include "cost/output_file.h"
 #include "cost/provenance.h"
 #include "geometry/input_error.h"
@@ -74,65 +75,18 @@ Json level_json(const LevelFit& f) {
           {"selection_path", path}};
 }
 
-/// Typed access to a JSON object, with errors naming the file and the key path.
-class Reader {
- public:
-  Reader(const Json& j, std::string where) : j_(j), where_(std::move(where)) {
-    if (!j_.is_object()) throw InputError(where_ + ": expected a JSON object");
-  }
-  const Json& at(const std::string& key) const {
-    const auto it = j_.find(key);
-    if (it == j_.end()) throw InputError(where_ + ": missing key '" + key + "'");
-    return *it;
-  }
-  Reader object(const std::string& key) const { return Reader(at(key), where_ + "." + key); }
-  double number(const std::string& key, bool nullable = false) const {
-    const Json& v = at(key);
-    if (nullable && v.is_null()) return std::numeric_limits<double>::quiet_NaN();
-    if (!v.is_number() || !std::isfinite(v.get<double>()))
-      throw InputError(where_ + "." + key + ": expected a finite number");
-    return v.get<double>();
-  }
-  std::string string(const std::string& key) const {
-    const Json& v = at(key);
-    if (!v.is_string()) throw InputError(where_ + "." + key + ": expected a string");
-    return v.get<std::string>();
-  }
-  bool boolean(const std::string& key) const {
-    const Json& v = at(key);
-    if (!v.is_boolean()) throw InputError(where_ + "." + key + ": expected true or false");
-    return v.get<bool>();
-  }
-  std::vector<std::string> strings(const std::string& key) const {
-    const Json& v = at(key);
-    if (!v.is_array()) throw InputError(where_ + "." + key + ": expected a list of strings");
-    std::vector<std::string> out;
-    for (const Json& s : v) {
-      if (!s.is_string()) throw InputError(where_ + "." + key + ": expected a list of strings");
-      out.push_back(s.get<std::string>());
-    }
-    return out;
-  }
-  const Json& json() const { return j_; }
-  const std::string& where() const { return where_; }
-
- private:
-  const Json& j_;
-  std::string where_;
-};
-
 /// The log-space spread of a version-1 file's model, which stored no residual spread: for
 /// log-normal errors of spread s, MAPE ≈ E|ε| = s·√(2/π), so s ≈ MAPE·√(π/2) (held-out MAPE when
 /// cross-validated).
 double log_sigma_from_mape(double mape) { return mape * std::sqrt(std::acos(-1.0) / 2.0); }
 
-LevelFit read_level(const Reader& r, ModelLevel level, int version) {
+LevelFit read_level(const JsonReader& r, ModelLevel level, int version) {
   LevelFit f;
   f.model.level = level;
   const Json& terms = r.at("terms");
   if (!terms.is_array() || terms.empty()) throw InputError(r.where() + ".terms: expected a non-empty list");
   for (std::size_t j = 0; j < terms.size(); ++j) {
-    const Reader t(terms[j], r.where() + ".terms[" + std::to_string(j) + "]");
+    const JsonReader t(terms[j], r.where() + ".terms[" + std::to_string(j) + "]");
     const std::string name = t.string("name");
     try {
       find_cost_term(level, name);
@@ -146,7 +100,7 @@ LevelFit read_level(const Reader& r, ModelLevel level, int version) {
     f.model.std_errors.push_back(t.number("std_error", true));
     f.at_bound.push_back(t.boolean("at_bound"));
   }
-  const Reader in = r.object("in_sample"), out = r.object("held_out");
+  const JsonReader in = r.object("in_sample"), out = r.object("held_out");
   f.in_sample_mape = in.number("mape");
   f.in_sample_r2 = in.number("r2");
   f.cross_validated = out.boolean("cross_validated");
@@ -181,12 +135,12 @@ LevelFit read_level(const Reader& r, ModelLevel level, int version) {
   f.converged = r.boolean("converged");
   f.dropped = r.strings("dropped");
   f.unused = r.strings("unused");
-  const Reader by = r.object("by_scene_family");
+  const JsonReader by = r.object("by_scene_family");
   for (auto it = by.json().begin(); it != by.json().end(); ++it) f.by_scene_family[it.key()] = by.strings(it.key());
   const Json& path = r.at("selection_path");
   if (!path.is_array()) throw InputError(r.where() + ".selection_path: expected a list");
   for (std::size_t k = 0; k < path.size(); ++k) {
-    const Reader s(path[k], r.where() + ".selection_path[" + std::to_string(k) + "]");
+    const JsonReader s(path[k], r.where() + ".selection_path[" + std::to_string(k) + "]");
     ScoredModel m;
     m.terms = s.strings("terms");
     m.held_out_mape = s.number("held_out_mape", true);
@@ -256,7 +210,7 @@ CostModelSet read_model_file(const std::string& path_in) {
     const auto at = msg.find("parse error");
     throw InputError(path + ": malformed JSON: " + (at == std::string::npos ? msg : msg.substr(at)));
   }
-  const Reader root(j, path);
+  const JsonReader root(j, path);
   if (!root.at("format").is_string() || root.string("format") != kFormat)
     throw InputError(path + ": not a raylab cost model (format is not '" + std::string(kFormat) + "')");
   const double version_number = root.number("version");
@@ -266,13 +220,13 @@ CostModelSet read_model_file(const std::string& path_in) {
   const int version = static_cast<int>(version_number);
   CostModelSet set;
   set.created = root.string("created");
-  const Reader data = root.object("data");
+  const JsonReader data = root.object("data");
   set.runs_source = data.string("runs");
   set.rows = static_cast<std::size_t>(data.number("rows"));
   set.hosts = data.strings("hosts");
   set.cpu_models = data.strings("cpu_models");
   set.git_revisions = data.strings("git_revisions");
-  const Reader fit = root.object("fit");
+  const JsonReader fit = root.object("fit");
   try {
     set.target = parse_fit_target(fit.string("target"));
   } catch (const InputError& e) {
@@ -281,10 +235,10 @@ CostModelSet read_model_file(const std::string& path_in) {
   set.options.residual = fit.string("residual") == "absolute" ? ResidualKind::absolute : ResidualKind::relative;
   set.options.loss_scale = fit.number("loss_scale");
   set.options.nonnegative = fit.boolean("nonnegative");
-  const Reader families = root.object("families");
+  const JsonReader families = root.object("families");
   if (families.json().empty()) throw InputError(path + ".families: the model has no structure family");
   for (auto it = families.json().begin(); it != families.json().end(); ++it) {
-    const Reader f = families.object(it.key());
+    const JsonReader f = families.object(it.key());
     FamilyModel m;
     m.family = it.key();
     m.rows = static_cast<std::size_t>(f.number("rows"));
@@ -297,10 +251,10 @@ CostModelSet read_model_file(const std::string& path_in) {
       if (groups < 0) throw InputError(f.where() + ".replicate_groups: expected a count >= 0");
       m.replicate_groups = static_cast<std::size_t>(groups);
     }
-    const Reader b = f.object("builder");
+    const JsonReader b = f.object("builder");
     m.builder = {b.number("c_trav"), b.number("c_leaf"), b.number("c_isect")};
     m.builder_source = b.string("source");
-    const Reader ranges = f.object("ranges");
+    const JsonReader ranges = f.object("ranges");
     for (auto r = ranges.json().begin(); r != ranges.json().end(); ++r) {
       const Json& v = r.value();
       if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number())

@@ -6,6 +6,7 @@
 #include <set>
 #include <tuple>
 
+#include "cost/json_reader.h"
 #include "cost/replicates.h"
 #include "geometry/input_error.h"
 
@@ -83,25 +84,18 @@ nlohmann::ordered_json spec_trace_effects_json(const SpecTraceEffects& effects) 
 }
 
 SpecTraceEffects read_spec_trace_effects(const nlohmann::ordered_json& j, const std::string& where) {
-  auto number = [](const nlohmann::ordered_json& o, const char* key, const std::string& path) {
-    if (!o.is_object() || !o.contains(key)) throw InputError(path + ": missing key '" + key + "'");
-    const auto& v = o.at(key);
-    if (!v.is_number() || !std::isfinite(v.get<double>())) throw InputError(path + "." + key + ": expected a finite number");
-    return v.get<double>();
-  };
-  if (!j.is_object()) throw InputError(where + ": expected a JSON object of accelerator specs");
+  const JsonReader specs(j, where);
   SpecTraceEffects out;
   for (auto s = j.begin(); s != j.end(); ++s) {
-    const std::string spec_path = where + "." + s.key();
-    if (!s.value().is_object()) throw InputError(spec_path + ": expected a JSON object of ray classes");
+    const JsonReader classes = specs.object(s.key());
     for (auto c = s.value().begin(); c != s.value().end(); ++c) {
-      const std::string path = spec_path + "." + c.key();
+      const JsonReader r = classes.object(c.key());
       SpecTraceEffect e;
-      e.effect = number(c.value(), "effect", path);
-      e.log_q90 = number(c.value(), "log_q90", path);
-      const double scenes = number(c.value(), "scenes", path);
-      if (e.log_q90 < 0) throw InputError(path + ".log_q90: must not be negative");
-      if (!(scenes >= 1) || scenes != std::floor(scenes)) throw InputError(path + ".scenes: expected a positive count");
+      e.effect = r.number("effect");
+      e.log_q90 = r.number("log_q90");
+      const double scenes = r.number("scenes");
+      if (e.log_q90 < 0) throw InputError(r.where() + ".log_q90: must not be negative");
+      if (!(scenes >= 1) || scenes != std::floor(scenes)) throw InputError(r.where() + ".scenes: expected a positive count");
       e.scenes = static_cast<std::size_t>(scenes);
       out.by_spec[s.key()][c.key()] = e;
     }
