@@ -8,9 +8,8 @@
 ///
 /// Why `auto` (auto_accel.h) ranks candidates by it: each spec's scene-level model
 /// (scene_trace_model.h) predicts its absolute time from the scene's features, fitted on the
-/// scenes the plan gave that spec; held out, they err by 28-47% (the quartiles over specs and
-/// classes on the quick report's data set, median 37%), and ranking two specs by two such
-/// predictions adds both errors. With the effects, every scene-level model votes on the new
+/// scenes the plan gave that spec; held out, they err by tens of per cent (each one's
+/// held_out.mape in model.json), and ranking two specs by two such predictions adds both errors. With the effects, every scene-level model votes on the new
 /// scene's b, b̂ = median over specs s of (ln t̂_s - a_s), and each candidate is predicted as
 /// exp(a_c + b̂): the candidates' differences come from paired measurements on shared scenes.
 ///
