@@ -238,6 +238,7 @@ std::vector<RunRecord> sweep_into(const SweepPlan& plan, const std::string& out,
 std::string deterministic_part(RunRecord r) {
   r.ns_per_ray_min = r.ns_per_ray_median = r.ns_per_ray_max = r.embree_ns_per_ray_min = r.build_s = 0;
   r.embree_ns_per_ray_max = r.build_s_max = 0;
+  r.embree_bytes = 0;  // Embree's allocator
   r.passes = 0;
   r.build_passes = 0;  // fewer builds once they total kSweepBuildSeconds
   return to_csv_row(r);

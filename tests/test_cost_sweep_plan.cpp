@@ -222,6 +222,7 @@ TEST(CostPlan, APlanWithReplicatesSweepsShardsAndMerges) {
     EXPECT_GT(r.working_set_bytes_est, 0) << r.accel;
     EXPECT_LE(r.working_set_bytes_est, static_cast<double>(r.bytes)) << r.accel;
     EXPECT_FALSE(r.cache_source.empty());
+    EXPECT_GT(r.embree_bytes, 0) << r.scene;  // the Embree scene the row was timed against
   }
 }
 
@@ -285,6 +286,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     EXPECT_EQ(r.ns_per_ray_max, 0.0);  // the slowest pass: not recorded then
     EXPECT_EQ(r.embree_ns_per_ray_max, 0.0);
     EXPECT_EQ(r.build_s_max, 0.0);
+    EXPECT_EQ(r.embree_bytes, 0);
   }
   // Rewritten with today's columns, they read back the same.
   const std::string path = scratch("rewritten.csv").string();
@@ -299,6 +301,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
     r.ns_per_ray_max = 2.5 * r.ns_per_ray_min;
     r.embree_ns_per_ray_max = 1.5 * r.embree_ns_per_ray_min;
     r.build_s_max = 3 * r.build_s;
+    r.embree_bytes = 88 * r.primitives;
     out << to_csv_row(r) << '\n';
   }
   const RunRecord back = read_runs_csv(path).front();
@@ -310,6 +313,7 @@ TEST(CostRunsCsv, OlderDataSetsReadWithTheNewColumnsAtTheirDefaults) {
   EXPECT_EQ(back.ns_per_ray_min, rows.front().ns_per_ray_min);
   EXPECT_EQ(back.embree_ns_per_ray_max, 1.5 * rows.front().embree_ns_per_ray_min);
   EXPECT_EQ(back.build_s_max, 3 * rows.front().build_s);
+  EXPECT_EQ(back.embree_bytes, 88 * rows.front().primitives);
 }
 
 TEST(CostMemoryFeatures, EstimatesFollowTheirDefinitions) {

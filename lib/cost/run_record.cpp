@@ -75,6 +75,7 @@ const std::vector<Column>& columns() {
       {"ns_per_ray_max", &RunRecord::ns_per_ray_max, true},
       {"embree_ns_per_ray_max", &RunRecord::embree_ns_per_ray_max, true},
       {"build_s_max", &RunRecord::build_s_max, true},
+      {"embree_bytes", &RunRecord::embree_bytes, true},
   };
   return table;
 }

@@ -42,6 +42,10 @@ struct RunRecord {
   std::int64_t build_passes = 1;  ///< 1 in data sets written before the column
   double embree_ns_per_ray_max = 0;  ///< Embree's slowest pass; 0 in data sets before the column
   double build_s_max = 0;            ///< the slowest build ([build_s, build_s_max]); 0 in data sets before the column
+  /// Bytes of the Embree scene the row was timed against (its BVH and geometry buffers, counted by
+  /// Embree's memory monitor; embree_accel.cpp); 0 in data sets before the column. Measured, not
+  /// counted: Embree's allocator may round differently from run to run.
+  std::int64_t embree_bytes = 0;
 
   // Counters, per ray, from a separate counted pass.
   double nodes_per_ray = 0, leaves_per_ray = 0, tests_per_ray = 0, hits_per_ray = 0, mailbox_skips_per_ray = 0;

@@ -410,6 +410,7 @@ RunRecord measure_case(const SweepCase& c, const Scene& scene, const BuiltStruct
   r.ns_per_ray_max = t.ns_per_ray_max;
   r.embree_ns_per_ray_min = t.embree_ns_per_ray_min;
   r.embree_ns_per_ray_max = t.embree_ns_per_ray_max;
+  r.embree_bytes = static_cast<std::int64_t>(embree.stats().bytes);
   r.build_s = built.build_s;
   r.build_s_max = built.build_s_max;
   r.build_passes = built.build_passes;

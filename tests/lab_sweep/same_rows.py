@@ -1,10 +1,10 @@
 """Exit 0 when two runs CSVs (raylab sweep, raylab merge) hold the same rows in the same order,
-timing columns aside; otherwise name the first difference. Usage: same_rows.py A.csv B.csv"""
+timing columns (and Embree's measured bytes) aside; otherwise name the first difference. Usage: same_rows.py A.csv B.csv"""
 import csv
 import sys
 
 TIMING = {"passes", "ns_per_ray_min", "ns_per_ray_median", "ns_per_ray_max", "embree_ns_per_ray_min",
-          "embree_ns_per_ray_max", "build_s", "build_s_max", "build_passes"}
+          "embree_ns_per_ray_max", "build_s", "build_s_max", "build_passes", "embree_bytes"}
 
 
 def rows(path):
