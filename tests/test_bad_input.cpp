@@ -325,6 +325,8 @@ TEST(BadInputTool, NegativeCountsGiveOneErrorLine) {
       {"trace --scene sphere:n=64 --accel bvh:optimize=treelet", "optimize"},
       {"trace --scene sphere:n=64 --accel bvh:nodes=compressed", "nodes"},
       {"trace --scene sphere:n=64 --accel bvh:nodes=quantized,width=2", "nodes=quantized"},
+      {"trace --scene sphere:n=64 --accel bvh:leaves=indexed,width=2", "leaves=indexed"},
+      {"trace --scene sphere:n=64 --accel bvh:leaves=copied", "leaves"},
   };
   fs::remove("/tmp/raylab_negative_threads.png");
   fs::remove("/tmp/raylab_negative_merge.csv");

@@ -128,14 +128,15 @@ void walk_bvh2(const Bvh2& tree, const Visit& visit) {
   });
 }
 
-/// The nodes of a wide BVH are references (WideRef): a leaf's names its packets.
-template <int N, class Node>
-void walk_wide_bvh(const WideBvh<N, Node>& wide, const Visit& visit) {
+/// The nodes of a wide BVH are references (WideRef): a leaf's names its packets in `leaves`
+/// (wide.packets, or the BVH's IndexedPackets when its leaves are indexed).
+template <int N, class Node, class Leaf>
+void walk_wide_bvh(const WideBvh<N, Node>& wide, std::span<const Leaf> leaves, const Visit& visit) {
   depth_first(BoxItem{0, wide.root_box, 0}, [&](const BoxItem& it, std::vector<BoxItem>& stack) {
     if (WideRef::is_leaf(it.node)) {
       std::size_t prims = 0;
       const std::uint32_t first = WideRef::first(it.node);
-      for (std::uint32_t p = first; p < first + WideRef::count(it.node); ++p) prims += wide.packets[p].size();
+      for (std::uint32_t p = first; p < first + WideRef::count(it.node); ++p) prims += leaves[p].size();
       visit(leaf_cell(it.box, prims, it.depth, WideRef::count(it.node)));  // one group per packet
       return;
     }
@@ -148,8 +149,12 @@ void walk_wide_bvh(const WideBvh<N, Node>& wide, const Visit& visit) {
 void walk_bvh(const Bvh& bvh, const Visit& visit) {
   if (bvh.tree().nodes.empty()) throw InputError("structure cells: the BVH is empty");
   const bool quantized = bvh.config().nodes == BvhNodes::quantized;
-  if (bvh.config().width == 4) return quantized ? walk_wide_bvh(bvh.quantized4(), visit) : walk_wide_bvh(bvh.wide4(), visit);
-  if (bvh.config().width == 8) return quantized ? walk_wide_bvh(bvh.quantized8(), visit) : walk_wide_bvh(bvh.wide8(), visit);
+  const auto walk = [&](const auto& wide) {
+    if (bvh.config().leaves == BvhLeaves::indexed) return walk_wide_bvh(wide, std::span(bvh.indexed()), visit);
+    walk_wide_bvh(wide, std::span(wide.packets), visit);
+  };
+  if (bvh.config().width == 4) return quantized ? walk(bvh.quantized4()) : walk(bvh.wide4());
+  if (bvh.config().width == 8) return quantized ? walk(bvh.quantized8()) : walk(bvh.wide8());
   walk_bvh2(bvh.tree(), visit);
 }
 

@@ -16,14 +16,25 @@ Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
   if (config_.width == 8 && !quantized) wide8_ = collapse_bvh<8>(tree_, *scene_);
   if (config_.width == 4 && quantized) quantized4_ = quantize_wide_bvh(collapse_bvh<4>(tree_, *scene_));
   if (config_.width == 8 && quantized) quantized8_ = quantize_wide_bvh(collapse_bvh<8>(tree_, *scene_));
+  if (config_.width != 2 && config_.leaves == BvhLeaves::indexed) {
+    std::vector<TrianglePacket>& packets = config_.width == 4 ? (quantized ? quantized4_.packets : wide4_.packets)
+                                                              : (quantized ? quantized8_.packets : wide8_.packets);
+    indexed_ = index_packets(*scene_, packets);
+    std::vector<TrianglePacket>().swap(packets);
+  }
 }
 
 AccelStats Bvh::stats() const {
   const bool quantized = config_.nodes == BvhNodes::quantized;
-  if (config_.width == 4 && quantized) return {quantized4_.bytes(), quantized4_.nodes.size(), build_sah_cost_};
-  if (config_.width == 8 && quantized) return {quantized8_.bytes(), quantized8_.nodes.size(), build_sah_cost_};
-  if (config_.width == 4) return {wide4_.bytes(), wide4_.nodes.size(), build_sah_cost_};
-  if (config_.width == 8) return {wide8_.bytes(), wide8_.nodes.size(), build_sah_cost_};
+  // Indexed leaves read the mesh's vertices at every test, so those count as traversed bytes (as
+  // Embree's geometry buffers count in its bytes; embree_accel.cpp).
+  const std::size_t leaf_bytes = config_.leaves == BvhLeaves::indexed
+                                     ? indexed_.size() * sizeof(IndexedPacket) + scene_->mesh.vertices.size() * sizeof(Vec3f)
+                                     : 0;
+  if (config_.width == 4 && quantized) return {quantized4_.bytes() + leaf_bytes, quantized4_.nodes.size(), build_sah_cost_};
+  if (config_.width == 8 && quantized) return {quantized8_.bytes() + leaf_bytes, quantized8_.nodes.size(), build_sah_cost_};
+  if (config_.width == 4) return {wide4_.bytes() + leaf_bytes, wide4_.nodes.size(), build_sah_cost_};
+  if (config_.width == 8) return {wide8_.bytes() + leaf_bytes, wide8_.nodes.size(), build_sah_cost_};
   return {tree_.nodes.size() * sizeof(Bvh2Node) + tree_.prims.size() * sizeof(std::uint32_t), tree_.nodes.size(),
           build_sah_cost_};
 }
@@ -38,6 +49,7 @@ const std::vector<std::string> kBuilders = {"midpoint", "median", "sweep", "binn
 const std::vector<std::string> kWidths = {"2", "4", "8"};
 const std::vector<std::string> kOptimizations = {"none", "reinsert"};
 const std::vector<std::string> kNodeKinds = {"full", "quantized"};
+const std::vector<std::string> kLeafKinds = {"packed", "indexed"};
 
 std::vector<ParamDoc> bvh_params() {
   return {{"builder", "binned",
@@ -53,6 +65,9 @@ std::vector<ParamDoc> bvh_params() {
           {"nodes", "full",
            "full (float child boxes) | quantized (8-bit child boxes relative to the node's, enlarged outward: "
            "half the node bytes, same first hits; width 4 or 8)"},
+          {"leaves", "packed",
+           "packed (each triangle's vertices copied into SIMD packets) | indexed (vertex indices, gathered "
+           "from the scene's mesh at each test: fewer bytes, slower tests; width 4 or 8)"},
           {"robust", "on",
            "on: Ize's conservative box test + `kernel` | off: the fast variant (plain slab test, Moller-Trumbore)"},
           kernel_param_doc("certified (robust=on), watertight (robust=off)"),
@@ -99,6 +114,9 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.nodes = r.get_choice("nodes", "full", kNodeKinds) == "quantized" ? BvhNodes::quantized : BvhNodes::full;
   if (c.nodes == BvhNodes::quantized && c.width == 2)
     throw InputError("accelerator '" + r.spec().text + "': nodes=quantized needs a wide tree (width=4 or 8)");
+  c.leaves = r.get_choice("leaves", "packed", kLeafKinds) == "indexed" ? BvhLeaves::indexed : BvhLeaves::packed;
+  if (c.leaves == BvhLeaves::indexed && c.width == 2)
+    throw InputError("accelerator '" + r.spec().text + "': leaves=indexed needs a wide tree (width=4 or 8)");
   c.robust = r.get_bool("robust", true);
   c.kernel = read_kernel_choice(r, c.robust ? KernelChoice::certified : KernelChoice::watertight);
   if (c.kernel == KernelChoice::certified && !c.robust)
@@ -142,7 +160,8 @@ AccelKind make_bvh_kind() {
            "builder=midpoint", "builder=median,leaf_size=1", "width=4,builder=median,leaf_size=1", "builder=spatial",
            "builder=sweep", "cost=default", "width=2,cost=default", "kernel=watertight", "kernel=watertight,width=4",
            "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2", "nodes=quantized",
-           "nodes=quantized,width=4,robust=off", "nodes=quantized,kernel=watertight"}};
+           "nodes=quantized,width=4,robust=off", "nodes=quantized,kernel=watertight", "leaves=indexed",
+           "leaves=indexed,nodes=quantized", "leaves=indexed,width=4,robust=off", "leaves=indexed,kernel=watertight"}};
 }
 
 namespace {

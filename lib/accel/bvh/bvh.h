@@ -1,11 +1,13 @@
 #pragma once
 /// `bvh`: the lecture's bounding volume hierarchy over a scene's triangles and spheres
 /// (bvh_build.h for the builders; bvh_traversal.h traverses the binary tree, width=2;
-/// wide_bvh_traversal.h the 4- or 8-wide tree collapsed from it, with packed leaves). The robust
+/// wide_bvh_traversal.h the 4- or 8-wide tree collapsed from it, with packed leaves, or indexed
+/// ones that gather their vertices from the mesh). The robust
 /// default pairs Ize's conservative box test with the watertight kernel; `robust=off` is the
 /// fast variant; `kernel=certified` pairs Ize's test with the certified kernel, whose closest()
 /// bound is raised past the rounding of the box entries (certified_kernel.h), so no box the
 /// exact ray touches before the exact first hit is pruned.
+#include <algorithm>
 #include <memory>
 
 #include "accel/bvh/bvh_build.h"
@@ -35,6 +37,8 @@ class Bvh final : public AggregateBase<Bvh> {
   const WideBvh<8>& wide8() const { return wide8_; }
   const QuantizedWideBvh<4>& quantized4() const { return quantized4_; }
   const QuantizedWideBvh<8>& quantized8() const { return quantized8_; }
+  /// The wide tree's leaves when config().leaves is indexed (its packets are then empty).
+  const std::vector<IndexedPacket>& indexed() const { return indexed_; }
   const BvhConfig& config() const { return config_; }
 
   template <class Counters>
@@ -61,6 +65,13 @@ class Bvh final : public AggregateBase<Bvh> {
   bool trace(const Ray& ray, Hit& hit, Counters& counters) const {
     if (tree_.nodes.empty()) return false;
     const bool quantized = config_.nodes == BvhNodes::quantized;
+    if (config_.leaves == BvhLeaves::indexed && config_.width != 2) {
+      if (config_.width == 8)
+        return quantized ? trace_wide_indexed<Kernel, kRobust, kAnyHit>(quantized8_, ray, hit, counters)
+                         : trace_wide_indexed<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
+      return quantized ? trace_wide_indexed<Kernel, kRobust, kAnyHit>(quantized4_, ray, hit, counters)
+                       : trace_wide_indexed<Kernel, kRobust, kAnyHit>(wide4_, ray, hit, counters);
+    }
     if (config_.width == 8)
       return quantized ? trace_wide<Kernel, kRobust, kAnyHit>(quantized8_, ray, hit, counters)
                        : trace_wide<Kernel, kRobust, kAnyHit>(wide8_, ray, hit, counters);
@@ -117,6 +128,44 @@ class Bvh final : public AggregateBase<Bvh> {
         });
   }
 
+  /// trace_wide with indexed leaves: each leaf's packets are gathered from the mesh's vertices two
+  /// at a time (the paired test's width) into packets on the stack, then tested as packed ones. Out of line
+  /// for the reason trace_wide is; `wide`'s packets are empty, its leaves refer to indexed_.
+  template <class Kernel, bool kRobust, bool kAnyHit, int N, class Node, class Counters>
+  [[gnu::noinline]] bool trace_wide_indexed(const WideBvh<N, Node>& wide, const Ray& ray, Hit& hit,
+                                            Counters& counters) const {
+    typename Kernel::Context ctx{};
+    typename PacketKernel<Kernel>::Ray packet_ray{};
+    bool prepared = kAnyHit;
+    if constexpr (kAnyHit) {
+      prepare_context<Kernel>(ctx, ray);
+      packet_ray = typename PacketKernel<Kernel>::Ray(ctx);
+    }
+    const Scene& scene = *scene_;
+    const IndexedPacket* ids = indexed_.data();
+    float closest = initial_closest<Kernel>(ray);
+    return traverse_wide_bvh<N, kRobust, kAnyHit>(
+        wide.nodes.data(), ids, ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
+          if (!prepared) {
+            prepare_context<Kernel>(ctx, ray);
+            packet_ray = typename PacketKernel<Kernel>::Ray(ctx);
+            prepared = true;
+          }
+          bool found = false;
+          alignas(32) TrianglePacket gathered[2];
+          for (std::uint32_t i = first; i < first + count; i += 2) {
+            const std::uint32_t n = std::min<std::uint32_t>(2, first + count - i);
+            for (std::uint32_t k = 0; k < n; ++k) gather_packet(scene, ids[i + k], gathered[k]);
+            if (intersect_packed_leaf<Kernel, kAnyHit>(scene, ctx, packet_ray, gathered, n, hit, counters)) {
+              found = true;
+              if constexpr (kAnyHit) break;
+            }
+          }
+          t = Kernel::closest(ctx);
+          return found;
+        });
+  }
+
   std::shared_ptr<const Scene> scene_;
   BvhConfig config_;
   Bvh2 tree_;
@@ -124,6 +173,7 @@ class Bvh final : public AggregateBase<Bvh> {
   WideBvh<8> wide8_;  ///< filled when config_.width == 8 and config_.nodes is full
   QuantizedWideBvh<4> quantized4_;  ///< filled when config_.width == 4 and config_.nodes is quantized
   QuantizedWideBvh<8> quantized8_;  ///< filled when config_.width == 8 and config_.nodes is quantized
+  std::vector<IndexedPacket> indexed_;  ///< the wide tree's leaves when config_.leaves is indexed
   Bounds3f bounds_;
   double build_sah_cost_ = 0.0;
 };

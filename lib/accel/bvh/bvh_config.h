@@ -28,6 +28,12 @@ enum class BvhNodes {
   quantized,  ///< 8-bit boxes relative to the node's own, enlarged outward (quantized_wide_node.h)
 };
 
+/// What a wide tree's leaves hold.
+enum class BvhLeaves {
+  packed,   ///< TrianglePackets: each triangle's vertices copied, SoA (packed_triangles.h)
+  indexed,  ///< IndexedPackets: vertex indices, the vertices gathered from the scene's mesh at each test
+};
+
 /// The SAH of a BVH (MacDonald and Booth 1990; the lecture's Cost = N_A·S_A + N_B·S_B):
 ///   node cost = c_trav + c_isect·(N_A·SA(A) + N_B·SA(B)) / SA(node),   leaf cost = c_isect·N,
 /// where a count N is rounded up to whole blocks of `leaf_block` primitives (bvh_leaf_units).
@@ -74,6 +80,8 @@ struct BvhConfig {
   double optimize_budget = 0.0;
   /// Child boxes of the wide tree (width 4 or 8).
   BvhNodes nodes = BvhNodes::full;
+  /// Leaves of the wide tree (width 4 or 8).
+  BvhLeaves leaves = BvhLeaves::packed;
   /// Ize's conservative slab test and `kernel`; off gives the `fast` variant (plain slab test,
   /// Moller-Trumbore, whatever `kernel` says), held by the oracle suite to its stated bound.
   bool robust = true;

@@ -40,4 +40,16 @@ std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims
   return static_cast<std::uint32_t>(out.size() - before);
 }
 
+std::vector<IndexedPacket> index_packets(const Scene& scene, std::span<const TrianglePacket> packets) {
+  std::vector<IndexedPacket> out(packets.size());
+  for (std::size_t i = 0; i < packets.size(); ++i)
+    for (int lane = 0; lane < kPacketWidth; ++lane) {
+      const std::uint32_t prim = packets[i].prim[lane];
+      out[i].prim[lane] = prim;
+      const bool triangle = prim != kInvalidId && !scene.is_sphere(prim);
+      for (int k = 0; k < 3; ++k) out[i].vertex[k][lane] = triangle ? scene.mesh.triangles[prim][k] : 0;
+    }
+  return out;
+}
+
 }  // namespace raylab

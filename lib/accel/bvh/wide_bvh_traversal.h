@@ -15,22 +15,22 @@
 namespace raylab {
 
 /// Prefetches the cache lines of child `ref`: an interior node's, or a leaf's first packet's (the
-/// leaf test reads the others after it).
-template <class Node>
-[[gnu::always_inline]] inline void prefetch_child(const Node* nodes, const TrianglePacket* packets, std::uint32_t ref) {
-  const char* p = WideRef::is_leaf(ref) ? reinterpret_cast<const char*>(packets + WideRef::first(ref))
+/// leaf test reads the others after it). `Leaf` is TrianglePacket or IndexedPacket.
+template <class Node, class Leaf>
+[[gnu::always_inline]] inline void prefetch_child(const Node* nodes, const Leaf* leaves, std::uint32_t ref) {
+  const char* p = WideRef::is_leaf(ref) ? reinterpret_cast<const char*>(leaves + WideRef::first(ref))
                                         : reinterpret_cast<const char*>(nodes + ref);
-  const std::size_t bytes = WideRef::is_leaf(ref) ? sizeof(TrianglePacket) : sizeof(Node);
+  const std::size_t bytes = WideRef::is_leaf(ref) ? sizeof(Leaf) : sizeof(Node);
   for (std::size_t offset = 0; offset < bytes; offset += 64) _mm_prefetch(p + offset, _MM_HINT_T0);
   _mm_prefetch(p + bytes - 1, _MM_HINT_T0);  // a packet is 16-byte aligned: it may reach one line further
 }
 
 /// Traverses `nodes` (root 0; WideBvhNode<N> or QuantizedWideBvhNode<N>) whose leaves reference
-/// `packets`. `closest` is the current closest-hit distance, which `leaf(first_packet,
+/// `leaves` (TrianglePacket, or IndexedPacket for indexed leaves). `closest` is the current closest-hit distance, which `leaf(first_packet,
 /// packet_count, closest)` lowers when it finds a hit and reports by returning true. Returns
 /// whether any leaf reported a hit; with kAnyHit the first report ends traversal.
-template <int N, bool kRobust, bool kAnyHit, class Node, class Counters, class LeafFn>
-bool traverse_wide_bvh(const Node* nodes, const TrianglePacket* packets, const Ray& ray, float& closest_out,
+template <int N, bool kRobust, bool kAnyHit, class Node, class Leaf, class Counters, class LeafFn>
+bool traverse_wide_bvh(const Node* nodes, const Leaf* leaves, const Ray& ray, float& closest_out,
                        Counters& counters, LeafFn&& leaf) {
   const WideBoxRay<N, kRobust> r(ray);
   float closest = closest_out;  // a register copy: the stack stores cannot alias it
@@ -54,7 +54,7 @@ bool traverse_wide_bvh(const Node* nodes, const TrianglePacket* packets, const R
       // too: at 10^6 triangles and more their packets miss as often (`raylab sweep`, with leaf
       // prefetch against without, each against Embree in one process, 3 measurements: 1.02-1.08
       // on 1.2·10^6 and 2.1·10^6 triangles, 1.00-1.02 on 7.5·10^4).
-      for (unsigned m = mask; m != 0; m &= m - 1) prefetch_child(nodes, packets, node.child[std::countr_zero(m)]);
+      for (unsigned m = mask; m != 0; m &= m - 1) prefetch_child(nodes, leaves, node.child[std::countr_zero(m)]);
       if (mask != 0) {
         const int i = std::countr_zero(mask);
         mask &= mask - 1;

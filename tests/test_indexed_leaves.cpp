@@ -1,0 +1,123 @@
+// Indexed leaves (`bvh:leaves=indexed`, packed_triangles.h): an IndexedPacket gathers back, bit for
+// bit, the TrianglePacket pack_leaf made (triangle, sphere and partly filled packets); the BVH
+// with indexed leaves finds the first hits and occlusions of packed leaves under every kernel,
+// width and node kind; and its bytes are its nodes, its packets and the vertices it reads.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+#include "accel/bvh/bvh.h"
+#include "accel/bvh/packed_triangles.h"
+#include "scene/scene_spec.h"
+
+namespace raylab {
+namespace {
+
+/// Triangles of a soup beside spheres, so leaves hold both kinds of packet.
+std::shared_ptr<const Scene> soup_and_spheres() {
+  auto scene = std::make_shared<Scene>(*make_scene("soup:n=1500"));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 200; ++i) scene->spheres.push_back({Vec3f(u(rng), u(rng), u(rng)), 0.01f + 0.02f * u(rng)});
+  return scene;
+}
+
+TEST(IndexedLeaves, GatherReproducesThePackedLeaves) {
+  const auto scene = soup_and_spheres();
+  std::vector<TrianglePacket> packed;
+  std::vector<std::uint32_t> prims;
+  for (std::uint32_t p = 0; p < scene->primitive_count(); ++p) {
+    prims.push_back(p);
+    if (prims.size() == 7 || p + 1 == scene->primitive_count()) {  // 7: every packet's second one is partly filled
+      pack_leaf(*scene, prims, packed);
+      prims.clear();
+    }
+  }
+  const std::vector<IndexedPacket> indexed = index_packets(*scene, packed);
+  ASSERT_EQ(indexed.size(), packed.size());
+  int spheres = 0, partial = 0;
+  for (std::size_t i = 0; i < packed.size(); ++i) {
+    SCOPED_TRACE("packet " + std::to_string(i));
+    TrianglePacket gathered;
+    gather_packet(*scene, indexed[i], gathered);
+    EXPECT_EQ(indexed[i].size(), packed[i].size());
+    ASSERT_EQ(std::memcmp(gathered.prim, packed[i].prim, sizeof gathered.prim), 0);
+    if (scene->is_sphere(packed[i].prim[0])) {
+      ++spheres;  // tested by id: the vertices are not read
+      continue;
+    }
+    partial += packed[i].size() < kPacketWidth;
+    EXPECT_EQ(std::memcmp(gathered.v, packed[i].v, sizeof gathered.v), 0);  // NaN lanes included
+  }
+  EXPECT_GT(spheres, 0);
+  EXPECT_GT(partial, 0);
+}
+
+TEST(IndexedLeaves, BvhFindsTheFirstHitsOfPackedLeaves) {
+  const std::vector<std::shared_ptr<const Scene>> scenes = {
+      make_scene("walls:n=12,angle=30"), make_scene("transformed:of=(sphere:n=2000),translate=1e4:-1e4:1e4"),
+      soup_and_spheres()};
+  for (const auto& scene : scenes) {
+    const Bounds3f box = scene->bounds();
+    for (const int width : {4, 8})
+      for (const BvhNodes nodes : {BvhNodes::full, BvhNodes::quantized})
+        for (const int kernel : {0, 1, 2}) {
+          BvhConfig config;
+          config.threads = 1;
+          config.width = width;
+          config.nodes = nodes;
+          config.robust = kernel != 2;
+          config.kernel = kernel == 0 ? KernelChoice::certified : KernelChoice::watertight;
+          const Bvh packed(scene, config);
+          config.leaves = BvhLeaves::indexed;
+          const Bvh indexed(scene, config);
+          EXPECT_TRUE(packed.indexed().empty());
+          EXPECT_FALSE(indexed.indexed().empty());
+          std::mt19937 rng(static_cast<unsigned>(width + 10 * kernel));
+          std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+          int hits = 0;
+          for (int i = 0; i < 2000; ++i) {
+            const Vec3f a = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
+            const Vec3f b = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
+            if (a == b) continue;
+            SCOPED_TRACE(scene->spec + " width " + std::to_string(width) + " kernel " + std::to_string(kernel) +
+                         " ray " + std::to_string(i));
+            Ray r1{a, b - a, 0.0f, std::numeric_limits<float>::infinity()}, r2 = r1;
+            Hit h1, h2;
+            const bool found = packed.intersect(r1, h1);
+            ASSERT_EQ(found, indexed.intersect(r2, h2));
+            if (found) {
+              EXPECT_EQ(h1.prim, h2.prim);
+              EXPECT_EQ(h1.t, h2.t);
+              EXPECT_EQ(h1.u, h2.u);
+              EXPECT_EQ(h1.v, h2.v);
+            }
+            const Ray segment{a, b - a, 0.0f, 0.5f};
+            EXPECT_EQ(packed.occluded(segment), indexed.occluded(segment));
+            hits += found;
+          }
+          EXPECT_GT(hits, 100);
+        }
+  }
+}
+
+TEST(IndexedLeaves, BytesAreTheNodesThePacketsAndTheVerticesRead) {
+  const auto scene = make_scene("sphere:n=20000");
+  for (const BvhNodes nodes : {BvhNodes::full, BvhNodes::quantized}) {
+    BvhConfig config;
+    config.threads = 1;
+    config.width = 8;
+    config.nodes = nodes;
+    const Bvh packed(scene, config);
+    config.leaves = BvhLeaves::indexed;
+    const Bvh indexed(scene, config);
+    const std::size_t packets = indexed.indexed().size();
+    const std::size_t node_bytes = packed.stats().bytes - packets * sizeof(TrianglePacket);
+    EXPECT_EQ(indexed.stats().bytes, node_bytes + packets * sizeof(IndexedPacket) + scene->mesh.vertices.size() * sizeof(Vec3f));
+    EXPECT_LT(indexed.stats().bytes, packed.stats().bytes * 3 / 4);  // 64 of a packet's 160 bytes, plus the vertices
+  }
+}
+
+}  // namespace
+}  // namespace raylab
