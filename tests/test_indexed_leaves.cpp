@@ -1,7 +1,8 @@
 // Indexed leaves (`bvh:leaves=indexed`, packed_triangles.h): an IndexedPacket gathers back, bit for
-// bit, the TrianglePacket pack_leaf made (triangle, sphere and partly filled packets); the BVH
-// with indexed leaves finds the first hits and occlusions of packed leaves under every kernel,
-// width and node kind; and its bytes are its nodes, its packets and the vertices it reads.
+// bit, the TrianglePacket pack_leaf made (triangle, sphere and partly filled packets), from a copy
+// holding each vertex once in the packets' order; the BVH with indexed leaves finds the first hits
+// and occlusions of packed leaves under every kernel, width and node kind; and its bytes are its
+// nodes, its packets and its vertices.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -34,14 +35,15 @@ TEST(IndexedLeaves, GatherReproducesThePackedLeaves) {
       prims.clear();
     }
   }
-  const std::vector<IndexedPacket> indexed = index_packets(*scene, packed);
-  ASSERT_EQ(indexed.size(), packed.size());
+  const IndexedLeaves indexed = index_packets(*scene, packed);
+  ASSERT_EQ(indexed.packets.size(), packed.size());
+  EXPECT_EQ(indexed.vertices.size(), scene->mesh.vertices.size() + 1);  // each used vertex once, and the spare
   int spheres = 0, partial = 0;
   for (std::size_t i = 0; i < packed.size(); ++i) {
     SCOPED_TRACE("packet " + std::to_string(i));
     TrianglePacket gathered;
-    gather_packet(*scene, indexed[i], gathered);
-    EXPECT_EQ(indexed[i].size(), packed[i].size());
+    gather_packet(*scene, indexed.vertices.data(), indexed.packets[i], gathered);
+    EXPECT_EQ(indexed.packets[i].size(), packed[i].size());
     ASSERT_EQ(std::memcmp(gathered.prim, packed[i].prim, sizeof gathered.prim), 0);
     if (scene->is_sphere(packed[i].prim[0])) {
       ++spheres;  // tested by id: the vertices are not read
@@ -72,8 +74,8 @@ TEST(IndexedLeaves, BvhFindsTheFirstHitsOfPackedLeaves) {
           const Bvh packed(scene, config);
           config.leaves = BvhLeaves::indexed;
           const Bvh indexed(scene, config);
-          EXPECT_TRUE(packed.indexed().empty());
-          EXPECT_FALSE(indexed.indexed().empty());
+          EXPECT_TRUE(packed.indexed().packets.empty());
+          EXPECT_FALSE(indexed.indexed().packets.empty());
           std::mt19937 rng(static_cast<unsigned>(width + 10 * kernel));
           std::uniform_real_distribution<float> unit(0.0f, 1.0f);
           int hits = 0;
@@ -102,7 +104,7 @@ TEST(IndexedLeaves, BvhFindsTheFirstHitsOfPackedLeaves) {
   }
 }
 
-TEST(IndexedLeaves, BytesAreTheNodesThePacketsAndTheVerticesRead) {
+TEST(IndexedLeaves, BytesAreTheNodesThePacketsAndTheVertices) {
   const auto scene = make_scene("sphere:n=20000");
   for (const BvhNodes nodes : {BvhNodes::full, BvhNodes::quantized}) {
     BvhConfig config;
@@ -112,9 +114,11 @@ TEST(IndexedLeaves, BytesAreTheNodesThePacketsAndTheVerticesRead) {
     const Bvh packed(scene, config);
     config.leaves = BvhLeaves::indexed;
     const Bvh indexed(scene, config);
-    const std::size_t packets = indexed.indexed().size();
+    const std::size_t packets = indexed.indexed().packets.size();
     const std::size_t node_bytes = packed.stats().bytes - packets * sizeof(TrianglePacket);
-    EXPECT_EQ(indexed.stats().bytes, node_bytes + packets * sizeof(IndexedPacket) + scene->mesh.vertices.size() * sizeof(Vec3f));
+    const std::size_t vertices = scene->mesh.vertices.size() + 1;  // a closed sphere: every vertex is used; the spare
+    EXPECT_EQ(indexed.indexed().vertices.size(), vertices);
+    EXPECT_EQ(indexed.stats().bytes, node_bytes + packets * sizeof(IndexedPacket) + vertices * sizeof(Vec3f));
     EXPECT_LT(indexed.stats().bytes, packed.stats().bytes * 3 / 4);  // 64 of a packet's 160 bytes, plus the vertices
   }
 }

@@ -150,7 +150,7 @@ void walk_bvh(const Bvh& bvh, const Visit& visit) {
   if (bvh.tree().nodes.empty()) throw InputError("structure cells: the BVH is empty");
   const bool quantized = bvh.config().nodes == BvhNodes::quantized;
   const auto walk = [&](const auto& wide) {
-    if (bvh.config().leaves == BvhLeaves::indexed) return walk_wide_bvh(wide, std::span(bvh.indexed()), visit);
+    if (bvh.config().leaves == BvhLeaves::indexed) return walk_wide_bvh(wide, std::span(bvh.indexed().packets), visit);
     walk_wide_bvh(wide, std::span(wide.packets), visit);
   };
   if (bvh.config().width == 4) return quantized ? walk(bvh.quantized4()) : walk(bvh.wide4());

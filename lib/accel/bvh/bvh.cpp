@@ -26,11 +26,7 @@ Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
 
 AccelStats Bvh::stats() const {
   const bool quantized = config_.nodes == BvhNodes::quantized;
-  // Indexed leaves read the mesh's vertices at every test, so those count as traversed bytes (as
-  // Embree's geometry buffers count in its bytes; embree_accel.cpp).
-  const std::size_t leaf_bytes = config_.leaves == BvhLeaves::indexed
-                                     ? indexed_.size() * sizeof(IndexedPacket) + scene_->mesh.vertices.size() * sizeof(Vec3f)
-                                     : 0;
+  const std::size_t leaf_bytes = indexed_.bytes();
   if (config_.width == 4 && quantized) return {quantized4_.bytes() + leaf_bytes, quantized4_.nodes.size(), build_sah_cost_};
   if (config_.width == 8 && quantized) return {quantized8_.bytes() + leaf_bytes, quantized8_.nodes.size(), build_sah_cost_};
   if (config_.width == 4) return {wide4_.bytes() + leaf_bytes, wide4_.nodes.size(), build_sah_cost_};
@@ -66,8 +62,8 @@ std::vector<ParamDoc> bvh_params() {
            "full (float child boxes) | quantized (8-bit child boxes relative to the node's, enlarged outward: "
            "half the node bytes, same first hits; width 4 or 8)"},
           {"leaves", "packed",
-           "packed (each triangle's vertices copied into SIMD packets) | indexed (vertex indices, gathered "
-           "from the scene's mesh at each test: fewer bytes, slower tests; width 4 or 8)"},
+           "packed (each triangle's vertices copied into SIMD packets) | indexed (vertex indices into one copy "
+           "of the leaves' vertices, gathered at each test: fewer bytes, slower tests; width 4 or 8)"},
           {"robust", "on",
            "on: Ize's conservative box test + `kernel` | off: the fast variant (plain slab test, Moller-Trumbore)"},
           kernel_param_doc("certified (robust=on), watertight (robust=off)"),

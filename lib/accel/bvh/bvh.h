@@ -38,7 +38,7 @@ class Bvh final : public AggregateBase<Bvh> {
   const QuantizedWideBvh<4>& quantized4() const { return quantized4_; }
   const QuantizedWideBvh<8>& quantized8() const { return quantized8_; }
   /// The wide tree's leaves when config().leaves is indexed (its packets are then empty).
-  const std::vector<IndexedPacket>& indexed() const { return indexed_; }
+  const IndexedLeaves& indexed() const { return indexed_; }
   const BvhConfig& config() const { return config_; }
 
   template <class Counters>
@@ -128,8 +128,8 @@ class Bvh final : public AggregateBase<Bvh> {
         });
   }
 
-  /// trace_wide with indexed leaves: each leaf's packets are gathered from the mesh's vertices two
-  /// at a time (the paired test's width) into packets on the stack, then tested as packed ones. Out of line
+  /// trace_wide with indexed leaves: each leaf's packets are gathered from indexed_.vertices two at
+  /// a time (the paired test's width) into packets on the stack, then tested as packed ones. Out of line
   /// for the reason trace_wide is; `wide`'s packets are empty, its leaves refer to indexed_.
   template <class Kernel, bool kRobust, bool kAnyHit, int N, class Node, class Counters>
   [[gnu::noinline]] bool trace_wide_indexed(const WideBvh<N, Node>& wide, const Ray& ray, Hit& hit,
@@ -142,7 +142,8 @@ class Bvh final : public AggregateBase<Bvh> {
       packet_ray = typename PacketKernel<Kernel>::Ray(ctx);
     }
     const Scene& scene = *scene_;
-    const IndexedPacket* ids = indexed_.data();
+    const IndexedPacket* ids = indexed_.packets.data();
+    const Vec3f* vertices = indexed_.vertices.data();
     float closest = initial_closest<Kernel>(ray);
     return traverse_wide_bvh<N, kRobust, kAnyHit>(
         wide.nodes.data(), ids, ray, closest, counters, [&](std::uint32_t first, std::uint32_t count, float& t) {
@@ -155,7 +156,7 @@ class Bvh final : public AggregateBase<Bvh> {
           alignas(32) TrianglePacket gathered[2];
           for (std::uint32_t i = first; i < first + count; i += 2) {
             const std::uint32_t n = std::min<std::uint32_t>(2, first + count - i);
-            for (std::uint32_t k = 0; k < n; ++k) gather_packet(scene, ids[i + k], gathered[k]);
+            for (std::uint32_t k = 0; k < n; ++k) gather_packet(scene, vertices, ids[i + k], gathered[k]);
             if (intersect_packed_leaf<Kernel, kAnyHit>(scene, ctx, packet_ray, gathered, n, hit, counters)) {
               found = true;
               if constexpr (kAnyHit) break;
@@ -173,7 +174,7 @@ class Bvh final : public AggregateBase<Bvh> {
   WideBvh<8> wide8_;  ///< filled when config_.width == 8 and config_.nodes is full
   QuantizedWideBvh<4> quantized4_;  ///< filled when config_.width == 4 and config_.nodes is quantized
   QuantizedWideBvh<8> quantized8_;  ///< filled when config_.width == 8 and config_.nodes is quantized
-  std::vector<IndexedPacket> indexed_;  ///< the wide tree's leaves when config_.leaves is indexed
+  IndexedLeaves indexed_;  ///< the wide tree's leaves when config_.leaves is indexed
   Bounds3f bounds_;
   double build_sah_cost_ = 0.0;
 };

@@ -31,7 +31,7 @@ enum class BvhNodes {
 /// What a wide tree's leaves hold.
 enum class BvhLeaves {
   packed,   ///< TrianglePackets: each triangle's vertices copied, SoA (packed_triangles.h)
-  indexed,  ///< IndexedPackets: vertex indices, the vertices gathered from the scene's mesh at each test
+  indexed,  ///< IndexedLeaves: packets of vertex indices into one copy of the leaves' vertices, gathered at each test
 };
 
 /// The SAH of a BVH (MacDonald and Booth 1990; the lecture's Cost = N_A·S_A + N_B·S_B):

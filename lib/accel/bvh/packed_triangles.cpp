@@ -40,15 +40,29 @@ std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims
   return static_cast<std::uint32_t>(out.size() - before);
 }
 
-std::vector<IndexedPacket> index_packets(const Scene& scene, std::span<const TrianglePacket> packets) {
-  std::vector<IndexedPacket> out(packets.size());
+IndexedLeaves index_packets(const Scene& scene, std::span<const TrianglePacket> packets) {
+  IndexedLeaves out;
+  out.packets.resize(packets.size());
+  std::vector<std::uint32_t> copy_of(scene.mesh.vertices.size(), kInvalidId);
   for (std::size_t i = 0; i < packets.size(); ++i)
     for (int lane = 0; lane < kPacketWidth; ++lane) {
       const std::uint32_t prim = packets[i].prim[lane];
-      out[i].prim[lane] = prim;
+      out.packets[i].prim[lane] = prim;
       const bool triangle = prim != kInvalidId && !scene.is_sphere(prim);
-      for (int k = 0; k < 3; ++k) out[i].vertex[k][lane] = triangle ? scene.mesh.triangles[prim][k] : 0;
+      for (int k = 0; k < 3; ++k) {
+        std::uint32_t copy = 0;
+        if (triangle) {
+          const std::uint32_t v = scene.mesh.triangles[prim][k];
+          if (copy_of[v] == kInvalidId) {
+            copy_of[v] = static_cast<std::uint32_t>(out.vertices.size());
+            out.vertices.push_back(scene.mesh.vertices[v]);
+          }
+          copy = copy_of[v];
+        }
+        out.packets[i].vertex[k][lane] = copy;
+      }
     }
+  out.vertices.push_back(Vec3f{});  // the spare: gather_packet reads one float past a vertex
   return out;
 }
 
