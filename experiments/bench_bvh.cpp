@@ -114,6 +114,9 @@ void BM_BvhTrace(benchmark::State& state, const std::string& scene_spec, const s
   state.counters["leaves"] = static_cast<double>(counted.counters.leaves) / n;
   state.counters["tests"] = static_cast<double>(counted.counters.prim_tests) / n;
   state.counters["triangles"] = static_cast<double>(scene->total_primitive_count());
+  // Bytes per triangle: ours (AccelStats::bytes) and Embree's fast-mode scene (BVH and geometry buffers).
+  state.counters["bytes_per_tri"] = static_cast<double>(accel->stats().bytes) / state.counters["triangles"];
+  state.counters["embree_bytes_per_tri"] = static_cast<double>(fast->stats().bytes) / state.counters["triangles"];
 }
 
 /// The scenes of $RAYLAB_BENCH_BVH_SCENES, each made up front (a spec make_scene rejects ends the

@@ -4,11 +4,11 @@ faster) in each measurement of the case (the first and its replicates), the medi
 percentile-bootstrap interval; and the geometric mean over the scenes, taken measurement by measurement.
 Writes OUT/README.md (tables, the command, the goals) and OUT/bvh_scale.png.
 
-With BENCH_JSON, the Google Benchmark JSON of `bench_bvh` on larger scenes (RAYLAB_BENCH_BVH_SCENES, with
+With BENCH_JSONs, Google Benchmark JSONs of `bench_bvh` on larger scenes (RAYLAB_BENCH_BVH_SCENES, with
 --benchmark_repetitions), the page also gives those scenes' ratios to Embree's fast mode (`vs_embree_fast`),
-median over the repetitions [95%].
+median over the repetitions [95%], and bytes per triangle where recorded.
 
-Usage: python3 experiments/bvh_scale.py RUNS_CSV OUT_DIR [BENCH_JSON]"""
+Usage: python3 experiments/bvh_scale.py RUNS_CSV OUT_DIR [BENCH_JSON...]"""
 import json
 import pathlib
 import sys
@@ -34,97 +34,135 @@ def median_interval(values):
     return float(np.median(v)), float(np.quantile(medians, 0.025)), float(np.quantile(medians, 0.975))
 
 
-def quantized_twin(accel: str) -> str:
-    """The spec of `accel` with quantized nodes (`bvh` -> `bvh:nodes=quantized`, `bvh:robust=off` ->
-    `bvh:nodes=quantized,robust=off`)."""
+BYTES_GOAL = 0.5  # issue 32: bytes per triangle at most half Embree's
+# Variants whose time is compared with the structure they change: (the parameter, what it changes).
+TWINS = [("nodes=quantized", "quantized nodes against full nodes"),
+         ("leaves=indexed", "indexed leaves against packed leaves")]
+
+
+def twin(accel: str, param: str) -> str:
+    """The spec of `accel` with `param` first among its parameters (`bvh`, nodes=quantized ->
+    `bvh:nodes=quantized`; `bvh:nodes=quantized`, leaves=indexed -> `bvh:leaves=indexed,nodes=quantized`)."""
     kind, _, params = accel.partition(":")
-    return f"{kind}:nodes=quantized" + (f",{params}" if params else "")
+    return f"{kind}:{param}" + (f",{params}" if params else "")
 
 
 def memory_section(df: pd.DataFrame) -> list:
-    """Bytes per triangle and node visits per structure and scene, and, for every structure whose
-    quantized twin is in the data, the twin's time against it: the ratio of their Embree ratios,
-    measurement by measurement (both alternate with Embree on the same rays), median [95%]."""
+    """Bytes per triangle (ours and, where the runs record it, Embree's) and node visits per structure and
+    scene, the bytes goal per structure, and, for every structure whose twin (TWINS) is in the data, the
+    twin's time against it: the ratio of their Embree ratios, measurement by measurement (both alternate
+    with Embree on the same rays), median [95%]."""
     if not {"bytes", "nodes_per_ray", "leaves_per_ray"} <= set(df.columns):
         return []
+    embree = "embree_bytes" in df.columns and bool((df["embree_bytes"] > 0).all())
     md = ["", "## Memory and node visits", "",
-          "*bytes/tri*: the traversed structure (wide nodes and triangle packets) per triangle; *visits/ray*: "
-          "interior nodes + leaves per diffuse ray; *ns/visit*: diffuse ns/ray over visits/ray (the traversal's "
-          "time per visit, leaf tests included).", "",
-          "| scene | triangles | structure | bytes/tri | visits/ray | ns/visit |", "|---|---|---|---|---|---|"]
+          "*bytes/tri*: the traversed structure per triangle: wide nodes and leaf packets, and with indexed leaves "
+          "the mesh vertices they read; *visits/ray*: interior nodes + leaves per diffuse ray; *ns/visit*: diffuse "
+          "ns/ray over visits/ray (the traversal's time per visit, leaf tests included)."
+          + (" *Embree bytes/tri*: the Embree scene each row was timed against, its BVH and its geometry buffers "
+             "(Embree's memory monitor), median over the measurements." if embree else ""), "",
+          "| scene | triangles | structure | bytes/tri | " + ("Embree bytes/tri | / Embree | " if embree else "") +
+          "visits/ray | ns/visit |", "|---|---|---|---|" + ("---|---|" if embree else "") + "---|---|"]
     diffuse = df[df["ray_kind"] == "diffuse"]
+    worst = {}
     for (scene, accel), g in sorted(diffuse.groupby(["scene", "accel"]), key=lambda k: (k[1]["primitives"].iloc[0], k[0][1])):
         tris = int(g["primitives"].iloc[0])
         visits = float(np.median(g["nodes_per_ray"] + g["leaves_per_ray"]))
         ns = float(np.median(g["ns_per_ray_min"]))
-        md.append(f"| {scene} | {tris:.3g} | `{accel}` | {float(np.median(g['bytes'])) / tris:.1f} | {visits:.1f} | "
-                  f"{ns / visits:.1f} |")
-    pairs = [(a, quantized_twin(a)) for a in dict.fromkeys(df["accel"]) if quantized_twin(a) in set(df["accel"])]
-    if not pairs:
-        return md
-    md += ["", "### Quantized nodes against full nodes", "",
-           "Throughput of the quantized twin over the full-node structure's (> 1: quantized is faster), from their "
-           "ratios to Embree measurement by measurement, median [95%].", "",
-           "| scene | triangles | comparison | primary | diffuse | shadow | bytes/tri, quantized / full |",
-           "|---|---|---|---|---|---|---|"]
-    for full, quantized in pairs:
-        for scene, g in sorted(df.groupby("scene"), key=lambda k: k[1]["primitives"].iloc[0]):
-            cells = []
-            for kind in KINDS:
-                a = g[(g["accel"] == full) & (g["ray_kind"] == kind)].set_index("replicate")["ratio"]
-                b = g[(g["accel"] == quantized) & (g["ray_kind"] == kind)].set_index("replicate")["ratio"]
-                both = (b / a).dropna()
-                if both.empty:
-                    cells.append("–")
-                    continue
-                m, lo, hi = median_interval(both)
-                cells.append(f"{m:.2f} [{lo:.2f}, {hi:.2f}]")
-            bytes_full = float(np.median(g[g["accel"] == full]["bytes"]))
-            bytes_q = float(np.median(g[g["accel"] == quantized]["bytes"]))
-            md.append(f"| {scene} | {int(g['primitives'].iloc[0]):.3g} | `{quantized}` / `{full}` | " + " | ".join(cells) +
-                      f" | {bytes_q / bytes_full:.2f} |")
+        ours = float(np.median(g["bytes"])) / tris
+        cells = f"| {scene} | {tris:.3g} | `{accel}` | {ours:.1f} | "
+        if embree:
+            theirs = float(np.median(g["embree_bytes"])) / tris
+            worst.setdefault(accel, []).append((ours / theirs, scene))
+            cells += f"{theirs:.1f} | {ours / theirs:.2f} | "
+        md.append(cells + f"{visits:.1f} | {ns / visits:.1f} |")
+    if worst:
+        md += ["", f"Bytes per triangle against Embree's (issue 32's goal: ≤ {BYTES_GOAL}×; a count, no interval), "
+               "the highest over the scenes:", "",
+               "| structure | highest / Embree | at | goal met? |", "|---|---|---|---|"]
+        for accel, ratios in worst.items():
+            r, scene = max(ratios)
+            md.append(f"| `{accel}` | {r:.2f} | {scene} | {'yes' if r <= BYTES_GOAL else 'no'} |")
+    accels = set(df["accel"])
+    for param, title in TWINS:
+        pairs = [(a, twin(a, param)) for a in dict.fromkeys(df["accel"]) if param not in a and twin(a, param) in accels]
+        if not pairs:
+            continue
+        name = param.split("=")[1]
+        md += ["", f"### {title[0].upper() + title[1:]}", "",
+               f"Throughput of the {name} twin over the structure it changes (> 1: the twin is faster), from their "
+               "ratios to Embree measurement by measurement, median [95%].", "",
+               f"| scene | triangles | comparison | primary | diffuse | shadow | bytes/tri, twin / structure |",
+               "|---|---|---|---|---|---|---|"]
+        for base, variant in pairs:
+            for scene, g in sorted(df.groupby("scene"), key=lambda k: k[1]["primitives"].iloc[0]):
+                cells = []
+                for kind in KINDS:
+                    a = g[(g["accel"] == base) & (g["ray_kind"] == kind)].set_index("replicate")["ratio"]
+                    b = g[(g["accel"] == variant) & (g["ray_kind"] == kind)].set_index("replicate")["ratio"]
+                    both = (b / a).dropna()
+                    if both.empty:
+                        cells.append("–")
+                        continue
+                    m, lo, hi = median_interval(both)
+                    cells.append(f"{m:.2f} [{lo:.2f}, {hi:.2f}]")
+                bytes_base = float(np.median(g[g["accel"] == base]["bytes"]))
+                bytes_variant = float(np.median(g[g["accel"] == variant]["bytes"]))
+                md.append(f"| {scene} | {int(g['primitives'].iloc[0]):.3g} | `{variant}` / `{base}` | " +
+                          " | ".join(cells) + f" | {bytes_variant / bytes_base:.2f} |")
     return md
 
 
-def bench_section(bench_json: str) -> list:
-    """The table of bench_bvh's repetitions: per scene, structure and ray kind, vs_embree_fast (Embree's
-    fast mode over ours, each the best of 5 alternated passes) median [95%] over the repetitions, nodes/ray."""
-    runs = [b for b in json.loads(pathlib.Path(bench_json).read_text())["benchmarks"]
-            if b.get("run_type", "iteration") == "iteration" and b["name"].startswith("BM_BvhTrace/")]
-    if not runs:
-        raise ValueError("no BM_BvhTrace runs")
-    groups = {}
-    for b in runs:
-        _, rest = b["name"].split("/", 1)
-        parts = rest.split("/")  # scene / rays / spec / iterations:N; scene specs hold no '/'
-        groups.setdefault((parts[0], parts[1].split(":")[0], parts[2]), []).append(b)
-    scenes = ";".join(dict.fromkeys(k[0] for k in groups))
-    specs = ";".join(dict.fromkeys(k[2] for k in groups))
-    repetitions = max(len(g) for g in groups.values())
-    cmd = (f"RAYLAB_BENCH_BVH_SCENES='{scenes}' RAYLAB_BENCH_BVH_SPECS='{specs}' build/experiments/bench_bvh "
-           f"--benchmark_repetitions={repetitions} --benchmark_out={bench_json} --benchmark_out_format=json")
-    md = ["", "## Scenes beyond the sweep (bench_bvh)", "",
-          f"`{cmd}`, then this script with that JSON as BENCH_JSON. Each repetition builds "
-          "every structure again and keeps the best of 5 passes alternating ours, `embree-robust` and `embree` on "
-          "the same 65,536 rays (thread CPU time); *ratio* is `embree`'s time over ours, median over the "
-          "repetitions [95% bootstrap].", "",
-          "| scene | triangles | structure | rays | ratio to `embree` [95%] | repetitions | nodes/ray |",
-          "|---|---|---|---|---|---|---|"]
+def bench_section(bench_jsons: list) -> list:
+    """The table of bench_bvh's repetitions, over every JSON of `bench_jsons`: per scene, structure and
+    ray kind, vs_embree_fast (Embree's fast mode over ours, each the best of 5 alternated passes) median
+    [95%] over the repetitions, nodes/ray, and (where the JSON records them) bytes per triangle, ours
+    and over Embree's."""
+    groups, commands = {}, []
+    for bench_json in bench_jsons:
+        runs = [b for b in json.loads(pathlib.Path(bench_json).read_text())["benchmarks"]
+                if b.get("run_type", "iteration") == "iteration" and b["name"].startswith("BM_BvhTrace/")]
+        if not runs:
+            raise ValueError(f"{bench_json}: no BM_BvhTrace runs")
+        mine = {}
+        for b in runs:
+            _, rest = b["name"].split("/", 1)
+            parts = rest.split("/")  # scene / rays / spec / iterations:N; scene specs hold no '/'
+            mine.setdefault((parts[0], parts[1].split(":")[0], parts[2]), []).append(b)
+        scenes = ";".join(dict.fromkeys(k[0] for k in mine))
+        specs = ";".join(dict.fromkeys(k[2] for k in mine))
+        repetitions = max(len(g) for g in mine.values())
+        commands.append(f"RAYLAB_BENCH_BVH_SCENES='{scenes}' RAYLAB_BENCH_BVH_SPECS='{specs}' build/experiments/bench_bvh "
+                        f"--benchmark_repetitions={repetitions} --benchmark_out={bench_json} --benchmark_out_format=json")
+        groups.update(mine)
+    md = ["", "## Scenes beyond the sweep (bench_bvh)", ""]
+    md += [f"`{cmd}`" for cmd in commands]
+    md += ["", "then this script with " + ("that JSON" if len(commands) == 1 else "those JSONs") + " as BENCH_JSON. "
+           "Each repetition builds every structure again and keeps the best of 5 passes alternating ours, "
+           "`embree-robust` and `embree` on the same 65,536 rays (thread CPU time); *ratio* is `embree`'s time over "
+           "ours, median over the repetitions [95% bootstrap]; *bytes/tri* ours, and over Embree's fast-mode scene "
+           "(its BVH and geometry buffers), where the run recorded them.", "",
+           "| scene | triangles | structure | rays | ratio to `embree` [95%] | repetitions | nodes/ray | bytes/tri | "
+           "/ Embree's |", "|---|---|---|---|---|---|---|---|---|"]
     for (scene, kind, spec), g in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][2], KINDS.index(kv[0][1]) if kv[0][1] in KINDS else 9)):
         m, lo, hi = median_interval([b["vs_embree_fast"] for b in g])
         tris = f"{g[0]['triangles']:.3g}" if "triangles" in g[0] else "–"
+        memory = "– | –"
+        if "bytes_per_tri" in g[0] and "embree_bytes_per_tri" in g[0]:
+            ours, theirs = (float(np.median([b[k] for b in g])) for k in ("bytes_per_tri", "embree_bytes_per_tri"))
+            memory = f"{ours:.1f} | {ours / theirs:.2f}"
         md.append(f"| {scene} | {tris} | `{spec}` | {kind} | {m:.2f} [{lo:.2f}, {hi:.2f}] | {len(g)} | "
-                  f"{float(np.median([b['nodes'] for b in g])):.1f} |")
+                  f"{float(np.median([b['nodes'] for b in g])):.1f} | {memory} |")
     return md
 
 
-def main(runs_csv: str, out_dir: str, bench_json: str = "") -> int:
+def main(runs_csv: str, out_dir: str, *bench_jsons: str) -> int:
     bench_md = []
-    if bench_json:
+    if bench_jsons:
         try:
-            bench_md = bench_section(bench_json)
-        except (OSError, ValueError, KeyError, IndexError) as e:
-            print(f"bvh_scale: {bench_json}: not a bench_bvh JSON of BM_BvhTrace runs ({e})", file=sys.stderr)
+            bench_md = bench_section(list(bench_jsons))
+        except (OSError, ValueError, KeyError, IndexError, json.JSONDecodeError) as e:
+            print(f"bvh_scale: {' '.join(bench_jsons)}: not bench_bvh JSONs of BM_BvhTrace runs ({e})", file=sys.stderr)
             return 2
     if not pathlib.Path(runs_csv).is_file():
         print(f"bvh_scale: {runs_csv}: no such file", file=sys.stderr)
@@ -164,7 +202,7 @@ def main(runs_csv: str, out_dir: str, bench_json: str = "") -> int:
         lowest = table[(table["accel"] == accel) & (table["kind"] == kind)].sort_values("ratio").iloc[0]
         geo.append((accel, kind, m, lo, hi, len(per_rep), lowest))
 
-    fig, axes = plt.subplots(1, len(KINDS), figsize=(15, 4.8), sharey=True)
+    fig, axes = plt.subplots(1, len(KINDS), figsize=(15, 5.4), sharey=True)
     colours = {a: plt.get_cmap("tab10")(i) for i, a in enumerate(accels)}
     for ax, kind in zip(axes, KINDS):
         for accel in accels:
@@ -182,10 +220,11 @@ def main(runs_csv: str, out_dir: str, bench_json: str = "") -> int:
         ax.set_title(f"{kind} rays", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("throughput / Embree's (fast mode), median [95%]")
-    axes[-1].legend(fontsize=8, loc="lower right")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=len(accels), bbox_to_anchor=(0.5, 0.0))
     fig.suptitle("The BVH against Embree across scales, single thread (dotted: the goals, 1.2 for robust=off and "
                  "1.0 for the default)", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     fig.savefig(out / "bvh_scale.png", dpi=110)
 
     md = ["# The BVH against Embree across scales", "",
@@ -193,7 +232,7 @@ def main(runs_csv: str, out_dir: str, bench_json: str = "") -> int:
           "on every ray kind and at every scale. Generated by",
           "", "```",
           f"build/raylab sweep --plan data/plans/bvh_scale.json --out {runs_csv}",
-          f"python3 experiments/bvh_scale.py {runs_csv} {out_dir}" + (f" {bench_json}" if bench_json else ""), "```", "",
+          f"python3 experiments/bvh_scale.py {runs_csv} {out_dir}" + "".join(f" {b}" for b in bench_jsons), "```", "",
           "Each case is measured 5 times: once, then 4 replicates after all other cases, each on a rebuilt "
           "structure, minutes apart. Each measurement is the minimum of at least 5 passes alternating with Embree's "
           "on the same 65,536 rays, in the tracing thread's CPU time. *ratio* is Embree's ns/ray over ours "
@@ -228,7 +267,7 @@ def main(runs_csv: str, out_dir: str, bench_json: str = "") -> int:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) not in (3, 4):
+    if len(sys.argv) < 3:
         print(__doc__.strip().splitlines()[-1], file=sys.stderr)
         sys.exit(2)
     sys.exit(main(*sys.argv[1:]))

@@ -941,8 +941,8 @@ std::string against_embree(Runner& run, const Options& opt) {
     }
   return md + "\n![BVH against Embree](bvh_embree.png)\n\n"
               "The same ratios across scales, from 1.6·10^4 to 1.9·10^7 triangles (refined scanned meshes and grass; "
-              "`bvh`, `bvh:robust=off` and `bvh:nodes=quantized`, with intervals, bytes per triangle and time per node "
-              "visit): [docs/bvh_scale](../bvh_scale/README.md), from `build/raylab sweep --plan "
+              "`bvh`, `bvh:robust=off`, `bvh:nodes=quantized` and indexed leaves, with intervals, bytes per triangle "
+              "against Embree's and time per node visit): [docs/bvh_scale](../bvh_scale/README.md), from `build/raylab sweep --plan "
               "data/plans/bvh_scale.json`, `bench_bvh` and `experiments/bvh_scale.py` (too long for this report).\n\n";
 }
 

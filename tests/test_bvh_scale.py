@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """experiments/bvh_scale.py, run as a user runs it on the committed data of docs/bvh_scale: its tables
-parse as Markdown and say what the data say (the quantized-against-full ratios and the bench table's
-medians, recomputed here from runs.csv and bench_1e7.json), and a missing or foreign input gets one
-error line and exit status 2."""
+parse as Markdown and say what the data say (the twins' ratios, the bytes against Embree's and the
+bench table's medians, recomputed here from runs.csv and the bench JSONs), and a missing or foreign
+input gets one error line and exit status 2."""
 import csv
 import json
 import pathlib
@@ -19,16 +19,23 @@ sys.path.insert(0, str(ROOT / "tests"))
 import check_markdown_tables  # noqa: E402
 
 
+BENCH = [DATA / "bench_1e7.json", DATA / "bench_1e7_indexed.json"]
+
+
 def table_rows(md: str, header_start: str):
-    """The rows (lists of cells) of the first table whose header line starts with `header_start`."""
+    """The rows (lists of cells) of every table whose header line starts with `header_start`."""
     lines = md.splitlines()
-    start = next(i for i, line in enumerate(lines) if line.startswith(header_start))
     rows = []
-    for line in lines[start + 2:]:
-        if not line.startswith("|"):
-            break
-        rows.append([c.strip() for c in line.strip("|").split("|")])
+    for start in (i for i, line in enumerate(lines) if line.startswith(header_start)):
+        for line in lines[start + 2:]:
+            if not line.startswith("|"):
+                break
+            rows.append([c.strip() for c in line.strip("|").split("|")])
     return rows
+
+
+def median(values):
+    return statistics.median(float(v) for v in values)
 
 
 class BvhScale(unittest.TestCase):
@@ -36,8 +43,8 @@ class BvhScale(unittest.TestCase):
     def setUpClass(cls):
         cls.dir = tempfile.TemporaryDirectory()
         cls.out = pathlib.Path(cls.dir.name)
-        run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs.csv"), str(cls.out),
-                              str(DATA / "bench_1e7.json")], capture_output=True, text=True)
+        run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs.csv"), str(cls.out), *map(str, BENCH)],
+                             capture_output=True, text=True)
         assert run.returncode == 0, run.stderr
         cls.md = (cls.out / "README.md").read_text()
 
@@ -48,7 +55,7 @@ class BvhScale(unittest.TestCase):
     def test_tables_parse(self):
         self.assertEqual(check_markdown_tables.main([str(self.out / "README.md")]), 0)
 
-    def test_quantized_ratios_are_the_data(self):
+    def test_twin_ratios_are_the_data(self):
         rows = list(csv.DictReader(open(DATA / "runs.csv")))
         ratio = {}
         for r in rows:
@@ -56,17 +63,39 @@ class BvhScale(unittest.TestCase):
                 float(r["embree_ns_per_ray_min"]) / float(r["ns_per_ray_min"])
         table = table_rows(self.md, "| scene | triangles | comparison |")
         self.assertGreater(len(table), 0)
+        self.assertEqual({cells[2].split(" / ")[0].strip("`") for cells in table},
+                         {"bvh:nodes=quantized", "bvh:leaves=indexed", "bvh:leaves=indexed,nodes=quantized"})
         for cells in table:
-            scene, full = cells[0], cells[2].split(" / ")[1].strip("`")
-            quantized = cells[2].split(" / ")[0].strip("`")
+            scene, base = cells[0], cells[2].split(" / ")[1].strip("`")
+            twin = cells[2].split(" / ")[0].strip("`")
             for kind, cell in zip(["primary", "diffuse", "shadow"], cells[3:6]):
-                reps = sorted({k[3] for k in ratio if k[:3] == (scene, full, kind)})
-                expected = statistics.median(ratio[(scene, quantized, kind, r)] / ratio[(scene, full, kind, r)]
+                reps = sorted({k[3] for k in ratio if k[:3] == (scene, base, kind)})
+                expected = statistics.median(ratio[(scene, twin, kind, r)] / ratio[(scene, base, kind, r)]
                                              for r in reps)
                 self.assertAlmostEqual(float(cell.split(" ")[0]), expected, delta=0.0051, msg=f"{scene} {kind}")
 
+    def test_bytes_against_embree_are_the_data(self):
+        rows = [r for r in csv.DictReader(open(DATA / "runs.csv")) if r["ray_kind"] == "diffuse"]
+        table = table_rows(self.md, "| scene | triangles | structure | bytes/tri | Embree bytes/tri |")
+        self.assertEqual(len(table), len({(r["scene"], r["accel"]) for r in rows}))
+        highest = {}
+        for cells in table:
+            scene, accel = cells[0], cells[2].strip("`")
+            mine = [r for r in rows if r["scene"] == scene and r["accel"] == accel]
+            tris = float(mine[0]["primitives"])
+            ratio = median(r["bytes"] for r in mine) / median(r["embree_bytes"] for r in mine)
+            self.assertAlmostEqual(float(cells[3]), median(r["bytes"] for r in mine) / tris, delta=0.051)
+            self.assertAlmostEqual(float(cells[5]), ratio, delta=0.0051, msg=f"{scene} {accel}")
+            highest[accel] = max(highest.get(accel, 0.0), ratio)
+        goal = table_rows(self.md, "| structure | highest / Embree |")
+        self.assertEqual({cells[0].strip("`") for cells in goal}, set(highest))
+        for cells in goal:
+            accel = cells[0].strip("`")
+            self.assertAlmostEqual(float(cells[1]), highest[accel], delta=0.0051)
+            self.assertEqual(cells[3], "yes" if float(cells[1]) <= 0.5 else "no")
+
     def test_bench_table_is_the_json(self):
-        runs = [b for b in json.loads((DATA / "bench_1e7.json").read_text())["benchmarks"]
+        runs = [b for path in BENCH for b in json.loads(path.read_text())["benchmarks"]
                 if b.get("run_type") == "iteration"]
         table = table_rows(self.md, "| scene | triangles | structure | rays | ratio to `embree`")
         self.assertEqual(len(table), len({b["run_name"] for b in runs}))
@@ -76,6 +105,13 @@ class BvhScale(unittest.TestCase):
                       and b["run_name"].split("/")[3] == spec]
             self.assertEqual(int(cells[5]), len(values))
             self.assertAlmostEqual(float(cells[4].split(" ")[0]), statistics.median(values), delta=0.0051)
+            recorded = [b for b in runs if b["run_name"].startswith(f"BM_BvhTrace/{scene}/{kind}:")
+                        and b["run_name"].split("/")[3] == spec and "bytes_per_tri" in b]
+            if recorded:
+                ours = median(b["bytes_per_tri"] for b in recorded)
+                self.assertAlmostEqual(float(cells[7]), ours, delta=0.051)
+                self.assertAlmostEqual(float(cells[8]), ours / median(b["embree_bytes_per_tri"] for b in recorded),
+                                       delta=0.0051)
 
     def refused(self, *args):
         run = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
@@ -86,10 +122,10 @@ class BvhScale(unittest.TestCase):
     def test_refuses_missing_and_foreign_inputs(self):
         with tempfile.TemporaryDirectory() as d:
             self.assertIn("no such file", self.refused(str(pathlib.Path(d) / "none.csv"), d))
-            self.assertIn("not a bench_bvh JSON", self.refused(str(DATA / "runs.csv"), d, str(DATA / "runs.csv")))
+            self.assertIn("not bench_bvh JSONs", self.refused(str(DATA / "runs.csv"), d, str(DATA / "runs.csv")))
             empty = pathlib.Path(d) / "empty.json"
             empty.write_text('{"benchmarks": []}')
-            self.assertIn("not a bench_bvh JSON", self.refused(str(DATA / "runs.csv"), d, str(empty)))
+            self.assertIn("not bench_bvh JSONs", self.refused(str(DATA / "runs.csv"), d, str(empty)))
 
 
 if __name__ == "__main__":
