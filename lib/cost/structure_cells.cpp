@@ -129,7 +129,7 @@ void walk_bvh2(const Bvh2& tree, const Visit& visit) {
 }
 
 /// The nodes of a wide BVH are references (WideRef): a leaf's names its packets in `leaves`
-/// (wide.packets, or the BVH's IndexedPackets when its leaves are indexed).
+/// (wide.packets, or the BVH's IndexedLeaves::packets when its leaves are indexed).
 template <int N, class Node, class Leaf>
 void walk_wide_bvh(const WideBvh<N, Node>& wide, std::span<const Leaf> leaves, const Visit& visit) {
   depth_first(BoxItem{0, wide.root_box, 0}, [&](const BoxItem& it, std::vector<BoxItem>& stack) {

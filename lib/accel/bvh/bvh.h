@@ -2,11 +2,11 @@
 /// `bvh`: the lecture's bounding volume hierarchy over a scene's triangles and spheres
 /// (bvh_build.h for the builders; bvh_traversal.h traverses the binary tree, width=2;
 /// wide_bvh_traversal.h the 4- or 8-wide tree collapsed from it, with packed leaves, or indexed
-/// ones that gather their vertices from the mesh). The robust
-/// default pairs Ize's conservative box test with the watertight kernel; `robust=off` is the
-/// fast variant; `kernel=certified` pairs Ize's test with the certified kernel, whose closest()
-/// bound is raised past the rounding of the box entries (certified_kernel.h), so no box the
-/// exact ray touches before the exact first hit is pruned.
+/// ones that gather their vertices from a copy of the leaves' vertices). The default pairs Ize's
+/// conservative box test with the certified kernel, whose closest() bound is raised past the
+/// rounding of the box entries (certified_kernel.h), so no box the exact ray touches before the
+/// exact first hit is pruned; `kernel=watertight` pairs the same test with the watertight kernel;
+/// `robust=off` is the fast variant.
 #include <algorithm>
 #include <memory>
 

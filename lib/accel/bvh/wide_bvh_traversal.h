@@ -26,9 +26,10 @@ template <class Node, class Leaf>
 }
 
 /// Traverses `nodes` (root 0; WideBvhNode<N> or QuantizedWideBvhNode<N>) whose leaves reference
-/// `leaves` (TrianglePacket, or IndexedPacket for indexed leaves). `closest` is the current closest-hit distance, which `leaf(first_packet,
-/// packet_count, closest)` lowers when it finds a hit and reports by returning true. Returns
-/// whether any leaf reported a hit; with kAnyHit the first report ends traversal.
+/// `leaves` (TrianglePacket, or IndexedPacket for indexed leaves). `closest` is the current
+/// closest-hit distance, which `leaf(first_packet, packet_count, closest)` lowers when it finds a
+/// hit and reports by returning true. Returns whether any leaf reported a hit; with kAnyHit the
+/// first report ends traversal.
 template <int N, bool kRobust, bool kAnyHit, class Node, class Leaf, class Counters, class LeafFn>
 bool traverse_wide_bvh(const Node* nodes, const Leaf* leaves, const Ray& ray, float& closest_out,
                        Counters& counters, LeafFn&& leaf) {
