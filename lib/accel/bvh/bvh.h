@@ -132,8 +132,8 @@ class Bvh final : public AggregateBase<Bvh> {
   /// a time (the paired test's width) into packets on the stack, then tested as packed ones. Out of line
   /// for the reason trace_wide is; `wide`'s packets are empty, its leaves refer to indexed_. The
   /// context setup repeats trace_wide's on purpose: shared through an inlined helper taking the leaf
-  /// test as a lambda, it took the default's throughput on bunny00 from 0.84-0.97 of Embree's to
-  /// 0.75-0.84 (`raylab sweep`, primary, diffuse and shadow rays, 3 measurements each).
+  /// test as a lambda, it took the default's throughput on bunny00 from 0.82-0.97 of Embree's to
+  /// 0.75-0.84 (`raylab sweep`, primary, diffuse and shadow rays, medians of 3 measurements).
   template <class Kernel, bool kRobust, bool kAnyHit, int N, class Node, class Counters>
   [[gnu::noinline]] bool trace_wide_indexed(const WideBvh<N, Node>& wide, const Ray& ray, Hit& hit,
                                             Counters& counters) const {

@@ -69,9 +69,10 @@ IndexedLeaves index_packets(const Scene& scene, std::span<const TrianglePacket> 
 /// vertices in unused lanes, and (a sphere packet of `scene`) the ids alone. Per corner, the four
 /// lanes' vertices are loaded 16 bytes each (x, y, z and the next float) and transposed into the
 /// packet's x, y and z vectors, which are stored whole, so the leaf test's vector loads forward
-/// from the stores. (Element-wise copies took 1.08-1.15x the time of these on bunny00, its
-/// Loop-refined 1.2·10^6 triangles and grass of 2.1·10^6: `raylab sweep`, one measurement each;
-/// AVX2 gathers were slower than element-wise copies on the grass.)
+/// from the stores. (Element-wise copies took 1.00-1.15x the time of these on bunny00, its
+/// Loop-refined 1.2·10^6 triangles and grass of 2.1·10^6, primary, diffuse and shadow rays:
+/// `raylab sweep`, one measurement each; AVX2 gathers were slower than element-wise copies on the
+/// grass.)
 [[gnu::always_inline]] inline void gather_packet(const Scene& scene, const Vec3f* vertices, const IndexedPacket& indexed,
                                                  TrianglePacket& out) {
   static_assert(kPacketWidth == 4 && sizeof(Vec3f) == 3 * sizeof(float));
