@@ -11,6 +11,7 @@
 #include "accel/bvh/bvh.h"
 #include "accel/bvh/packed_triangles.h"
 #include "scene/scene_spec.h"
+#include "same_first_hits.h"
 
 namespace raylab {
 namespace {
@@ -76,29 +77,9 @@ TEST(IndexedLeaves, BvhFindsTheFirstHitsOfPackedLeaves) {
           const Bvh indexed(scene, config);
           EXPECT_TRUE(packed.indexed().packets.empty());
           EXPECT_FALSE(indexed.indexed().packets.empty());
-          std::mt19937 rng(static_cast<unsigned>(width + 10 * kernel));
-          std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-          int hits = 0;
-          for (int i = 0; i < 2000; ++i) {
-            const Vec3f a = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
-            const Vec3f b = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
-            if (a == b) continue;
-            SCOPED_TRACE(scene->spec + " width " + std::to_string(width) + " kernel " + std::to_string(kernel) +
-                         " ray " + std::to_string(i));
-            Ray r1{a, b - a, 0.0f, std::numeric_limits<float>::infinity()}, r2 = r1;
-            Hit h1, h2;
-            const bool found = packed.intersect(r1, h1);
-            ASSERT_EQ(found, indexed.intersect(r2, h2));
-            if (found) {
-              EXPECT_EQ(h1.prim, h2.prim);
-              EXPECT_EQ(h1.t, h2.t);
-              EXPECT_EQ(h1.u, h2.u);
-              EXPECT_EQ(h1.v, h2.v);
-            }
-            const Ray segment{a, b - a, 0.0f, 0.5f};
-            EXPECT_EQ(packed.occluded(segment), indexed.occluded(segment));
-            hits += found;
-          }
+          const int hits = test::expect_same_first_hits(
+              packed, indexed, box, static_cast<unsigned>(width + 10 * kernel), 2000,
+              scene->spec + " width " + std::to_string(width) + " kernel " + std::to_string(kernel));
           EXPECT_GT(hits, 100);
         }
   }

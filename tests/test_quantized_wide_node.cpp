@@ -13,6 +13,7 @@
 #include "accel/bvh/simd_box_test.h"
 #include "geometry/float_mode.h"
 #include "scene/scene_spec.h"
+#include "same_first_hits.h"
 
 namespace raylab {
 namespace {
@@ -158,25 +159,8 @@ TEST(QuantizedWideNode, BvhFindsTheFirstHitsOfFullNodes) {
         const Bvh quantized(scene, config);
         EXPECT_LT(quantized.stats().bytes, full.stats().bytes);
         EXPECT_EQ(quantized.stats().nodes, full.stats().nodes);
-        std::mt19937 rng(width);
-        std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-        int hits = 0;
-        for (int i = 0; i < 3000; ++i) {
-          const Vec3f a = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
-          const Vec3f b = box.lo + box.diagonal() * Vec3f{unit(rng), unit(rng), unit(rng)};
-          if (a == b) continue;
-          SCOPED_TRACE(std::string(spec) + " width " + std::to_string(width) + " ray " + std::to_string(i));
-          Ray r1{a, b - a, 0.0f, std::numeric_limits<float>::infinity()}, r2 = r1;
-          Hit h1, h2;
-          const bool found = full.intersect(r1, h1);
-          ASSERT_EQ(found, quantized.intersect(r2, h2));
-          if (found) {
-            EXPECT_EQ(h1.prim, h2.prim);
-            EXPECT_EQ(h1.t, h2.t);
-          }
-          EXPECT_EQ(full.occluded(Ray{a, b - a, 0.0f, 0.5f}), quantized.occluded(Ray{a, b - a, 0.0f, 0.5f}));
-          hits += found;
-        }
+        const int hits = test::expect_same_first_hits(full, quantized, box, static_cast<unsigned>(width), 3000,
+                                                      std::string(spec) + " width " + std::to_string(width));
         EXPECT_GT(hits, 100);
       }
   }
