@@ -76,11 +76,11 @@ IndexedLeaves index_packets(const Scene& scene, std::span<const TrianglePacket> 
 [[gnu::always_inline]] inline void gather_packet(const Scene& scene, const Vec3f* vertices, const IndexedPacket& indexed,
                                                  TrianglePacket& out) {
   static_assert(kPacketWidth == 4 && sizeof(Vec3f) == 3 * sizeof(float));
-  _mm_store_si128(reinterpret_cast<__m128i*>(out.prim), _mm_load_si128(reinterpret_cast<const __m128i*>(indexed.prim)));
+  const __m128i prims = _mm_load_si128(reinterpret_cast<const __m128i*>(indexed.prim));
+  _mm_store_si128(reinterpret_cast<__m128i*>(out.prim), prims);
   if (scene.is_sphere(indexed.prim[0])) return;  // sphere packets are tested by id (packed_triangles_simd.h)
   // Unused lanes (id kInvalidId) get pack_leaf's quiet NaN.
-  const __m128 unused = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(indexed.prim)),
-                                                         _mm_set1_epi32(static_cast<int>(kInvalidId))));
+  const __m128 unused = _mm_castsi128_ps(_mm_cmpeq_epi32(prims, _mm_set1_epi32(static_cast<int>(kInvalidId))));
   const __m128 nan = _mm_set1_ps(std::numeric_limits<float>::quiet_NaN());
   const auto in_use = [&](__m128 x) {
 #if defined(__SSE4_1__)
