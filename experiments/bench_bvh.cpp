@@ -119,23 +119,8 @@ void BM_BvhTrace(benchmark::State& state, const std::string& scene_spec, const s
   state.counters["embree_bytes_per_tri"] = static_cast<double>(fast->stats().bytes) / state.counters["triangles"];
 }
 
-/// The scenes of $RAYLAB_BENCH_BVH_SCENES, each made up front (a spec make_scene rejects ends the
-/// program with one `error:` line and exit status 2), or kScenes.
-std::vector<std::string> scenes_from_env() {
-  const std::optional<std::vector<std::string>> listed = list_from_env("RAYLAB_BENCH_BVH_SCENES");
-  if (!listed) return kScenes;
-  try {
-    if (listed->empty()) throw InputError("no scene spec");
-    for (const auto& spec : *listed) scene_for(spec);
-  } catch (const InputError& e) {
-    std::cerr << "error: $RAYLAB_BENCH_BVH_SCENES: " << e.what() << "\n";
-    std::exit(2);
-  }
-  return *listed;
-}
-
 const bool registered = [] {
-  for (const auto& s : scenes_from_env())
+  for (const auto& s : scene_specs_from_env("RAYLAB_BENCH_BVH_SCENES", kScenes, scene_for))
     for (const auto& r : kRayKinds)
       for (const auto& a : accelerator_specs_from_env("RAYLAB_BENCH_BVH_SPECS", kBvhSpecs))
         benchmark::RegisterBenchmark(("BM_BvhTrace/" + s + "/" + rays_on(s, r) + "/" + a).c_str(), BM_BvhTrace, s,

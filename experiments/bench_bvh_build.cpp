@@ -2,16 +2,21 @@
 // build table. Each iteration builds ours and Embree's in turn (alternating, so machine noise
 // hits both alike), each through make_accelerator inside a TBB arena of the stated threads, as
 // exp_bvh times them; the best wall-clock time of each is kept.
-//  - BM_BvhBuild/<scene>/<threads>: `bvh` (binned SAH, width 8) against Embree medium quality.
+//  - BM_BvhBuild/<scene>/<threads>: `bvh` (binned SAH, width 8) against Embree medium quality;
+//    BM_BvhBuild/<scene>/<threads>/<spec>: another spec of $RAYLAB_BENCH_BVH_BUILD_SPECS against
+//    the same (for example an optimised tree: build + optimise against Embree medium).
 //  - BM_SbvhBuild/<scene>/<threads>: `bvh:builder=spatial` against Embree high quality.
 // Counters:
 //      vs_embree     our best wall-clock build seconds over Embree's (< 1: we build faster)
 //      vs_embree_cpu the same with the process's CPU seconds (every thread; the steadier figure
 //                    at 1 thread on a shared machine)
 //      faults, embree_faults  fewest minor page faults of a build (first touches: slow on VMs)
-//      ours_ms, embree_ms, bytes_per_tri, embree_bytes_per_tri, sah_cost
+//      ours_ms, embree_ms, bytes_per_tri, embree_bytes_per_tri, sah_cost, triangles (the scene's primitives)
 //   build/experiments/bench_bvh_build
 //   build/experiments/bench_bvh_build --benchmark_filter='BM_BvhBuild/.*/1'
+//   RAYLAB_BENCH_BVH_BUILD_SCENES='subdivided:of=cgal:bunny00,levels=2' \
+//   RAYLAB_BENCH_BVH_BUILD_SPECS='bvh;bvh:optimize=reinsert,optimize_budget=0.2' build/experiments/bench_bvh_build
+//     (other scenes and specs, ';'-separated; `bvh` keeps the name without a spec)
 #include <benchmark/benchmark.h>
 #include <tbb/task_arena.h>
 
@@ -100,15 +105,20 @@ void BM_Build(benchmark::State& state, const std::string& scene_spec, const std:
   state.counters["bytes_per_tri"] = static_cast<double>(ours->stats().bytes) / tris;
   state.counters["embree_bytes_per_tri"] = static_cast<double>(theirs->stats().bytes) / tris;
   state.counters["sah_cost"] = ours->stats().sah_cost;
+  state.counters["triangles"] = tris;
 }
 
 const bool registered = [] {
-  for (const auto& s : kScenes) {
-    for (int threads : {1, 2})
-      benchmark::RegisterBenchmark(("BM_BvhBuild/" + s + "/" + std::to_string(threads)).c_str(), BM_Build, s,
-                                   "bvh", "embree", threads)
-          ->Unit(benchmark::kMillisecond)
-          ->Iterations(7);
+  const auto scenes = scene_specs_from_env("RAYLAB_BENCH_BVH_BUILD_SCENES", kScenes, scene_for);
+  const auto specs = accelerator_specs_from_env("RAYLAB_BENCH_BVH_BUILD_SPECS", {"bvh"});
+  for (const auto& s : scenes) {
+    for (const auto& spec : specs)
+      for (int threads : {1, 2})
+        benchmark::RegisterBenchmark(
+            ("BM_BvhBuild/" + s + "/" + std::to_string(threads) + (spec == "bvh" ? "" : "/" + spec)).c_str(),
+            BM_Build, s, spec, "embree", threads)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(7);
     benchmark::RegisterBenchmark(("BM_SbvhBuild/" + s + "/2").c_str(), BM_Build, s, "bvh:builder=spatial",
                                  "embree:quality=high", 2)
         ->Unit(benchmark::kMillisecond)

@@ -42,6 +42,24 @@ inline std::optional<std::vector<std::string>> list_from_env(const char* variabl
   return items;
 }
 
+/// The ';'-separated scene specs in $`variable`, each made up front through `make` (a spec
+/// make_scene rejects ends the program with one `error:` line naming the variable, and exit
+/// status 2), or `fallback` when it is unset or empty.
+template <class MakeScene>
+std::vector<std::string> scene_specs_from_env(const char* variable, std::vector<std::string> fallback,
+                                              MakeScene&& make) {
+  const std::optional<std::vector<std::string>> listed = list_from_env(variable);
+  if (!listed) return fallback;
+  try {
+    if (listed->empty()) throw InputError("no scene spec");
+    for (const auto& spec : *listed) make(spec);
+  } catch (const InputError& e) {
+    std::cerr << "error: $" << variable << ": " << e.what() << "\n";
+    std::exit(2);
+  }
+  return *listed;
+}
+
 /// The ';'-separated accelerator specs in $`variable`, or `fallback` when it is unset or empty.
 /// Each is built once over a 20-triangle sphere first: a spec the factory rejects ends the program
 /// with one `error:` line naming the variable, and exit status 2.
