@@ -19,7 +19,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 import check_markdown_tables  # noqa: E402
 
 
-BENCH = [DATA / "bench_1e7.json", DATA / "bench_1e7_indexed.json"]
+BENCH = [DATA / "bench_1e7.json", DATA / "bench_1e7_indexed.json", DATA / "bench_1e6_optimize.json"]
+BUILD = [DATA / "build_1e6.json"]
 
 
 def table_rows(md: str, header_start: str):
@@ -43,7 +44,7 @@ class BvhScale(unittest.TestCase):
     def setUpClass(cls):
         cls.dir = tempfile.TemporaryDirectory()
         cls.out = pathlib.Path(cls.dir.name)
-        run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs.csv"), str(cls.out), *map(str, BENCH)],
+        run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs.csv"), str(cls.out), *map(str, BENCH + BUILD)],
                              capture_output=True, text=True)
         assert run.returncode == 0, run.stderr
         cls.md = (cls.out / "README.md").read_text()
@@ -96,7 +97,7 @@ class BvhScale(unittest.TestCase):
 
     def test_bench_table_is_the_json(self):
         runs = [b for path in BENCH for b in json.loads(path.read_text())["benchmarks"]
-                if b.get("run_type") == "iteration"]
+                if b.get("run_type") == "iteration" and b["run_name"].startswith("BM_BvhTrace/")]
         table = table_rows(self.md, "| scene | triangles | structure | rays | ratio to `embree`")
         self.assertEqual(len(table), len({b["run_name"] for b in runs}))
         for cells in table:
@@ -113,6 +114,25 @@ class BvhScale(unittest.TestCase):
                 self.assertAlmostEqual(float(cells[8]), ours / median(b["embree_bytes_per_tri"] for b in recorded),
                                        delta=0.0051)
 
+    def test_build_table_is_the_json(self):
+        runs = [b for path in BUILD for b in json.loads(path.read_text())["benchmarks"]
+                if b.get("run_type") == "iteration"]
+        table = table_rows(self.md, "| scene | triangles | structure | threads | ours ms |")
+        self.assertEqual(len(table), len({b["run_name"] for b in runs}))
+        for cells in table:
+            scene, spec, threads = cells[0], cells[2].strip("`"), cells[3]
+            prefix = "BM_SbvhBuild" if spec == "bvh:builder=spatial" else "BM_BvhBuild"
+            name = f"{prefix}/{scene}/{threads}" + ("" if spec in ("bvh", "bvh:builder=spatial") else f"/{spec}")
+            values = [b["vs_embree"] for b in runs if b["run_name"] == name + "/" + b["run_name"].split("/")[-1]]
+            self.assertEqual(int(cells[7]), len(values), name)
+            self.assertAlmostEqual(float(cells[6].split(" ")[0]), statistics.median(values), delta=0.0051)
+            lo, hi = (float(x) for x in cells[6].split("[")[1].rstrip("]").split(", "))
+            goal = 1.5 if "optimize=" in spec else 1.0 if spec == "bvh" else None
+            self.assertEqual(cells[9], "–" if goal is None else f"≤ {goal}")
+            expected = ("–" if goal is None else "yes" if hi <= goal else "no" if lo > goal
+                        else "not shown at this noise")
+            self.assertEqual(cells[10], expected, name)
+
     def refused(self, *args):
         run = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
         self.assertEqual(run.returncode, 2, run.stderr)
@@ -122,10 +142,11 @@ class BvhScale(unittest.TestCase):
     def test_refuses_missing_and_foreign_inputs(self):
         with tempfile.TemporaryDirectory() as d:
             self.assertIn("no such file", self.refused(str(pathlib.Path(d) / "none.csv"), d))
-            self.assertIn("not bench_bvh JSONs", self.refused(str(DATA / "runs.csv"), d, str(DATA / "runs.csv")))
+            self.assertIn("not a bench_bvh or bench_bvh_build JSON",
+                          self.refused(str(DATA / "runs.csv"), d, str(DATA / "runs.csv")))
             empty = pathlib.Path(d) / "empty.json"
             empty.write_text('{"benchmarks": []}')
-            self.assertIn("not bench_bvh JSONs", self.refused(str(DATA / "runs.csv"), d, str(empty)))
+            self.assertIn("not a bench_bvh or bench_bvh_build JSON", self.refused(str(DATA / "runs.csv"), d, str(empty)))
 
 
 if __name__ == "__main__":
