@@ -270,6 +270,21 @@ TEST(AutoAccel, WithoutACountNothingIsTimedAndTheChoiceRepeats) {
   }
 }
 
+TEST(AutoAccel, ARepeatedChoiceOutsideTheRangeWarnsOnce) {
+  // Eight times the tiny sweep's largest scene, a size no other test here builds.
+  const auto scene = make_scene("soup:n=50000");
+  const std::string spec = "auto:model=" + tiny_model() + ",rays=primary,count=1000";
+  testing::internal::CaptureStderr();
+  const auto one = make_accelerator(spec, scene), two = make_accelerator(spec, scene);
+  const std::string warnings = testing::internal::GetCapturedStderr();
+  EXPECT_GT(choice_of(*one).extrapolation_factor, 5.0);
+  EXPECT_EQ(choice_of(*two).extrapolation_factor, choice_of(*one).extrapolation_factor);
+  const std::string line = "raylab: warning: auto: 5e+04 primitives lie outside the range";
+  const auto at = warnings.find(line);
+  EXPECT_NE(at, std::string::npos) << warnings;
+  EXPECT_EQ(warnings.find(line, at + 1), std::string::npos) << "warned twice: " << warnings;
+}
+
 TEST(AutoAccel, InstancedScenesChooseForEachPart) {
   const auto scene = make_scene("instances:of=(sphere:n=800),count=6");
   const auto accel = make_accelerator("auto:model=" + tiny_model() + ",rays=primary,count=5000", scene);

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <cstdio>
+#include <limits>
 #include <map>
+#include <mutex>
+#include <set>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
@@ -375,7 +377,9 @@ std::unique_ptr<Aggregate> choose(const std::shared_ptr<const Scene>& scene, con
   return choose_built_all(scene, models, model_path, choice);
 }
 
-/// One warning line when the choice rests on models used outside the sizes they were fitted on.
+/// One warning line when the choice rests on models used outside the sizes they were fitted on;
+/// once per process for the same text (a process that builds `auto` on the same scene again,
+/// as an experiment's rounds do, is told once; AutoChoice::extrapolation_factor keeps it for each).
 void warn_if_extrapolated(const AutoChoice& choice, double primitives) {
   if (!(choice.extrapolation_factor > 1.0)) return;
   char numbers[160];
@@ -383,8 +387,12 @@ void warn_if_extrapolated(const AutoChoice& choice, double primitives) {
                 primitives, choice.extrapolation_factor);
   char widening[64];
   std::snprintf(widening, sizeof widening, "%.2fx", range_widening(choice.extrapolation_factor));
-  warn_input("auto: " + std::string(numbers) + " (its choice " + choice.chosen + "); the 90% intervals are widened by " +
-             widening + " (docs/cost_model.md)");
+  const std::string message = "auto: " + std::string(numbers) + " (its choice " + choice.chosen +
+                              "); the 90% intervals are widened by " + widening + " (docs/cost_model.md)";
+  static std::mutex mutex;
+  static std::set<std::string> warned;
+  const std::lock_guard lock(mutex);
+  if (warned.insert(message).second) warn_input(message);
 }
 
 std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecReader& r) {
