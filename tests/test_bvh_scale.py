@@ -133,6 +133,41 @@ class BvhScale(unittest.TestCase):
                         else "not shown at this noise")
             self.assertEqual(cells[10], expected, name)
 
+    def test_two_thread_page_has_its_goals_and_command(self):
+        with tempfile.TemporaryDirectory() as d:
+            out = pathlib.Path(d) / "threads2"
+            run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs_2threads.csv"), str(out),
+                                  "--plan", "data/plans/bvh_scale_2threads.json"], capture_output=True, text=True)
+            self.assertEqual(run.returncode, 0, run.stderr)
+            md = (out / "README.md").read_text()
+            self.assertIn("--plan data/plans/bvh_scale_2threads.json --threads 2 --out", md)
+            self.assertIn("wall-clock time on 2 threads", md)
+            goals = {cells[0]: cells[4] for cells in table_rows(md, "| comparison | rays | geometric mean")}
+            self.assertEqual(goals, {"`bvh:robust=off` / `embree`": "≥ 1.1", "`bvh` / `embree`": "≥ 1.0"})
+            # The single-thread page written beside it links it.
+            run = subprocess.run([sys.executable, str(TOOL), str(DATA / "runs.csv"), d], capture_output=True, text=True)
+            self.assertEqual(run.returncode, 0, run.stderr)
+            self.assertIn("[2 threads](threads2/README.md)", (pathlib.Path(d) / "README.md").read_text())
+
+    def test_geometric_means_are_the_data(self):
+        for runs, page in ((DATA / "runs.csv", self.md), (DATA / "runs_2threads.csv", None)):
+            if page is None:
+                with tempfile.TemporaryDirectory() as d:
+                    run = subprocess.run([sys.executable, str(TOOL), str(runs), d], capture_output=True, text=True)
+                    self.assertEqual(run.returncode, 0, run.stderr)
+                    page = (pathlib.Path(d) / "README.md").read_text()
+            rows = list(csv.DictReader(open(runs)))
+            for cells in table_rows(page, "| comparison | rays | geometric mean"):
+                accel, kind = cells[0].split(" / ")[0].strip("`"), cells[1]
+                per_rep = {}
+                for r in rows:
+                    if r["accel"] == accel and r["ray_kind"] == kind:
+                        per_rep.setdefault(r["replicate"], []).append(
+                            float(r["embree_ns_per_ray_min"]) / float(r["ns_per_ray_min"]))
+                means = [statistics.geometric_mean(v) for v in per_rep.values()]
+                self.assertAlmostEqual(float(cells[2].split(" ")[0]), statistics.median(means), delta=0.0051,
+                                       msg=f"{runs.name} {accel} {kind}")
+
     def refused(self, *args):
         run = subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True)
         self.assertEqual(run.returncode, 2, run.stderr)
@@ -144,6 +179,10 @@ class BvhScale(unittest.TestCase):
             self.assertIn("no such file", self.refused(str(pathlib.Path(d) / "none.csv"), d))
             self.assertIn("not a bench_bvh or bench_bvh_build JSON",
                           self.refused(str(DATA / "runs.csv"), d, str(DATA / "runs.csv")))
+            mixed = pathlib.Path(d) / "mixed.csv"
+            mixed.write_text((DATA / "runs.csv").read_text() +
+                             "".join((DATA / "runs_2threads.csv").read_text().splitlines(keepends=True)[1:]))
+            self.assertIn("thread counts", self.refused(str(mixed), d))
             empty = pathlib.Path(d) / "empty.json"
             empty.write_text('{"benchmarks": []}')
             self.assertIn("not a bench_bvh or bench_bvh_build JSON", self.refused(str(DATA / "runs.csv"), d, str(empty)))
