@@ -123,8 +123,8 @@ def memory_section(df: pd.DataFrame) -> list:
 def bench_section(bench_jsons: list) -> list:
     """The table of bench_bvh's repetitions, over every JSON of `bench_jsons`: per scene, structure and
     ray kind, vs_embree_fast (Embree's fast mode over ours, each the best of 5 alternated passes) median
-    [95%] over the repetitions, nodes/ray, and (where the JSON records them) bytes per triangle, ours
-    and over Embree's."""
+    [95%] over the repetitions (of every JSON that measures the case), nodes/ray, and (where the JSON
+    records them) bytes per triangle, ours and over Embree's."""
     groups, commands = {}, []
     for bench_json in bench_jsons:
         runs = [b for b in json.loads(pathlib.Path(bench_json).read_text())["benchmarks"]
@@ -135,13 +135,15 @@ def bench_section(bench_jsons: list) -> list:
         for b in runs:
             _, rest = b["name"].split("/", 1)
             parts = rest.split("/")  # scene / rays / spec / iterations:N; scene specs hold no '/'
+            b["_rep"] = (bench_json, b.get("repetition_index", 0))  # pairs one process's repetitions
             mine.setdefault((parts[0], parts[1].split(":")[0], parts[2]), []).append(b)
         scenes = ";".join(dict.fromkeys(k[0] for k in mine))
         specs = ";".join(dict.fromkeys(k[2] for k in mine))
         repetitions = max(len(g) for g in mine.values())
         commands.append(f"RAYLAB_BENCH_BVH_SCENES='{scenes}' RAYLAB_BENCH_BVH_SPECS='{specs}' build/experiments/bench_bvh "
                         f"--benchmark_repetitions={repetitions} --benchmark_out={bench_json} --benchmark_out_format=json")
-        groups.update(mine)
+        for key, g in mine.items():  # a case in several JSONs pools their repetitions
+            groups.setdefault(key, []).extend(g)
     if not groups:
         return []
     md = ["", "## Scenes beyond the sweep (bench_bvh)", ""]
@@ -162,6 +164,44 @@ def bench_section(bench_jsons: list) -> list:
             memory = f"{ours:.1f} | {ours / theirs:.2f}"
         md.append(f"| {scene} | {tris} | `{spec}` | {kind} | {m:.2f} [{lo:.2f}, {hi:.2f}] | {len(g)} | "
                   f"{float(np.median([b['nodes'] for b in g])):.1f} | {memory} |")
+    return md + kernel_section(groups)
+
+
+# The default's time against the specs that drop, in turn, the certified kernel and the conservative traversal.
+KERNEL_STEPS = ("bvh", "bvh:kernel=watertight", "bvh:robust=off")
+
+
+def kernel_section(groups: dict) -> list:
+    """Where the default `bvh` loses time, from bench_bvh runs of the three KERNEL_STEPS on the same scene
+    and rays: the certified kernel against the watertight one (both under the conservative traversal), and
+    that against `robust=off` (Möller-Trumbore and the plain slab test). Each time ratio is the ratio of the
+    two specs' throughputs over Embree's fast mode, repetition by repetition of one process, median [95%]."""
+    cases = sorted({(scene, kind) for scene, kind, spec in groups
+                    if all((scene, kind, s) in groups for s in KERNEL_STEPS)},
+                   key=lambda k: (k[0], KINDS.index(k[1]) if k[1] in KINDS else 9))
+    if not cases:
+        return []
+    md = ["", "### Where the default's time goes", "",
+          "Time per ray of the default `bvh` (certified kernel, conservative traversal) over `bvh:kernel=watertight` "
+          "(watertight kernel, the same traversal), and of that over `bvh:robust=off` (Möller-Trumbore, plain slab "
+          "test): each from the two structures' throughputs over Embree's fast mode, repetition by repetition "
+          "(> 1: the first is slower), median [95%]; the three trace the same trees (nodes and tests per ray).", "",
+          "| scene | triangles | rays | certified / watertight [95%] | watertight / `robust=off` [95%] | "
+          "default / `robust=off` [95%] | nodes/ray | tests/ray |", "|---|---|---|---|---|---|---|---|"]
+
+    def time_ratio(scene, kind, slow, fast):
+        by_rep = {spec: {b["_rep"]: b["vs_embree_fast"] for b in groups[(scene, kind, spec)]} for spec in (slow, fast)}
+        both = [by_rep[fast][r] / by_rep[slow][r] for r in by_rep[slow] if r in by_rep[fast]]
+        m, lo, hi = median_interval(both)
+        return f"{m:.2f} [{lo:.2f}, {hi:.2f}]"
+
+    for scene, kind in cases:
+        g = groups[(scene, kind, "bvh")]
+        tris = f"{g[0]['triangles']:.3g}" if "triangles" in g[0] else "–"
+        md.append(f"| {scene} | {tris} | {kind} | {time_ratio(scene, kind, 'bvh', 'bvh:kernel=watertight')} | "
+                  f"{time_ratio(scene, kind, 'bvh:kernel=watertight', 'bvh:robust=off')} | "
+                  f"{time_ratio(scene, kind, 'bvh', 'bvh:robust=off')} | {float(np.median([b['nodes'] for b in g])):.1f} | "
+                  f"{float(np.median([b['tests'] for b in g])):.1f} |")
     return md
 
 

@@ -19,7 +19,8 @@ sys.path.insert(0, str(ROOT / "tests"))
 import check_markdown_tables  # noqa: E402
 
 
-BENCH = [DATA / "bench_1e7.json", DATA / "bench_1e7_indexed.json", DATA / "bench_1e6_optimize.json"]
+BENCH = [DATA / "bench_1e7.json", DATA / "bench_1e7_indexed.json", DATA / "bench_1e6_optimize.json",
+         DATA / "bench_kernels.json"]
 BUILD = [DATA / "build_1e6.json"]
 
 
@@ -113,6 +114,26 @@ class BvhScale(unittest.TestCase):
                 self.assertAlmostEqual(float(cells[7]), ours, delta=0.051)
                 self.assertAlmostEqual(float(cells[8]), ours / median(b["embree_bytes_per_tri"] for b in recorded),
                                        delta=0.0051)
+
+    def test_kernel_steps_are_the_json(self):
+        runs = [b for b in json.loads((DATA / "bench_kernels.json").read_text())["benchmarks"]
+                if b.get("run_type") == "iteration"]
+        table = table_rows(self.md, "| scene | triangles | rays | certified / watertight")
+        self.assertEqual(len(table), len({tuple(b["run_name"].split("/")[1:3]) for b in runs}))
+
+        def ratio(scene, kind, slow, fast):
+            vs = {spec: {b["repetition_index"]: b["vs_embree_fast"] for b in runs
+                         if b["run_name"].startswith(f"BM_BvhTrace/{scene}/{kind}:") and b["run_name"].split("/")[3] == spec}
+                  for spec in (slow, fast)}
+            return statistics.median(vs[fast][r] / vs[slow][r] for r in vs[slow])
+
+        for cells in table:
+            scene, kind = cells[0], cells[2]
+            for cell, (slow, fast) in zip(cells[3:6], [("bvh", "bvh:kernel=watertight"),
+                                                       ("bvh:kernel=watertight", "bvh:robust=off"),
+                                                       ("bvh", "bvh:robust=off")]):
+                self.assertAlmostEqual(float(cell.split(" ")[0]), ratio(scene, kind, slow, fast), delta=0.0051,
+                                       msg=f"{scene} {kind} {slow}")
 
     def test_build_table_is_the_json(self):
         runs = [b for path in BUILD for b in json.loads(path.read_text())["benchmarks"]
