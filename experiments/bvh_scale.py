@@ -120,40 +120,58 @@ def memory_section(df: pd.DataFrame) -> list:
     return md
 
 
+def grouped_runs(bench_jsons: list, names: tuple, case, command):
+    """The iteration runs of `bench_jsons` whose benchmark (the name's first part) is one of `names`,
+    grouped by case(run); a case in several JSONs pools their repetitions, and each run's `_rep` (its
+    JSON and repetition) pairs one process's repetitions. Also, for each JSON holding such runs,
+    command(JSON, its groups): the command that measured it."""
+    groups, commands = {}, []
+    for bench_json in bench_jsons:
+        mine = {}
+        for b in json.loads(pathlib.Path(bench_json).read_text())["benchmarks"]:
+            if b.get("run_type", "iteration") != "iteration" or b["name"].split("/")[0] not in names:
+                continue
+            b["_rep"] = (bench_json, b.get("repetition_index", 0))
+            mine.setdefault(case(b), []).append(b)
+        if not mine:
+            continue
+        commands.append(command(bench_json, mine))
+        for key, g in mine.items():
+            groups.setdefault(key, []).extend(g)
+    return groups, commands
+
+
+def measured_by(title: str, commands: list, method: str) -> list:
+    """A section's title, the commands that measured its JSONs, and how: `method`."""
+    return (["", title, ""] + [f"`{cmd}`" for cmd in commands] +
+            ["", "then this script with " + ("that JSON" if len(commands) == 1 else "those JSONs") + " as BENCH_JSON. " +
+             method])
+
+
 def bench_section(bench_jsons: list) -> list:
     """The table of bench_bvh's repetitions, over every JSON of `bench_jsons`: per scene, structure and
     ray kind, vs_embree_fast (Embree's fast mode over ours, each the best of 5 alternated passes) median
     [95%] over the repetitions (of every JSON that measures the case), nodes/ray, and (where the JSON
     records them) bytes per triangle, ours and over Embree's."""
-    groups, commands = {}, []
-    for bench_json in bench_jsons:
-        runs = [b for b in json.loads(pathlib.Path(bench_json).read_text())["benchmarks"]
-                if b.get("run_type", "iteration") == "iteration" and b["name"].startswith("BM_BvhTrace/")]
-        if not runs:
-            continue
-        mine = {}
-        for b in runs:
-            _, rest = b["name"].split("/", 1)
-            parts = rest.split("/")  # scene / rays / spec / iterations:N; scene specs hold no '/'
-            b["_rep"] = (bench_json, b.get("repetition_index", 0))  # pairs one process's repetitions
-            mine.setdefault((parts[0], parts[1].split(":")[0], parts[2]), []).append(b)
-        scenes = ";".join(dict.fromkeys(k[0] for k in mine))
-        specs = ";".join(dict.fromkeys(k[2] for k in mine))
-        repetitions = max(len(g) for g in mine.values())
-        commands.append(f"RAYLAB_BENCH_BVH_SCENES='{scenes}' RAYLAB_BENCH_BVH_SPECS='{specs}' build/experiments/bench_bvh "
-                        f"--benchmark_repetitions={repetitions} --benchmark_out={bench_json} --benchmark_out_format=json")
-        for key, g in mine.items():  # a case in several JSONs pools their repetitions
-            groups.setdefault(key, []).extend(g)
+    def case(b):  # BM_BvhTrace / scene / rays / spec / iterations:N; scene specs hold no '/'
+        parts = b["name"].split("/")
+        return parts[1], parts[2].split(":")[0], parts[3]
+
+    def command(bench_json, mine):
+        return (f"RAYLAB_BENCH_BVH_SCENES='{';'.join(dict.fromkeys(k[0] for k in mine))}' "
+                f"RAYLAB_BENCH_BVH_SPECS='{';'.join(dict.fromkeys(k[2] for k in mine))}' build/experiments/bench_bvh "
+                f"--benchmark_repetitions={max(len(g) for g in mine.values())} --benchmark_out={bench_json} "
+                "--benchmark_out_format=json")
+
+    groups, commands = grouped_runs(bench_jsons, ("BM_BvhTrace",), case, command)
     if not groups:
         return []
-    md = ["", "## Scenes beyond the sweep (bench_bvh)", ""]
-    md += [f"`{cmd}`" for cmd in commands]
-    md += ["", "then this script with " + ("that JSON" if len(commands) == 1 else "those JSONs") + " as BENCH_JSON. "
-           "Each repetition builds every structure again and keeps the best of 5 passes alternating ours, "
-           "`embree-robust` and `embree` on the same 65,536 rays (thread CPU time); *ratio* is `embree`'s time over "
-           "ours, median over the repetitions [95% bootstrap]; *bytes/tri* ours, and over Embree's fast-mode scene "
-           "(its BVH and geometry buffers), where the run recorded them.", "",
-           "| scene | triangles | structure | rays | ratio to `embree` [95%] | repetitions | nodes/ray | bytes/tri | "
+    md = measured_by("## Scenes beyond the sweep (bench_bvh)", commands,
+                     "Each repetition builds every structure again and keeps the best of 5 passes alternating ours, "
+                     "`embree-robust` and `embree` on the same 65,536 rays (thread CPU time); *ratio* is `embree`'s time "
+                     "over ours, median over the repetitions [95% bootstrap]; *bytes/tri* ours, and over Embree's "
+                     "fast-mode scene (its BVH and geometry buffers), where the run recorded them.")
+    md += ["", "| scene | triangles | structure | rays | ratio to `embree` [95%] | repetitions | nodes/ray | bytes/tri | "
            "/ Embree's |", "|---|---|---|---|---|---|---|---|---|"]
     for (scene, kind, spec), g in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][2], KINDS.index(kv[0][1]) if kv[0][1] in KINDS else 9)):
         m, lo, hi = median_interval([b["vs_embree_fast"] for b in g])
@@ -214,36 +232,29 @@ def build_section(bench_jsons: list) -> list:
     Embree's (medium quality; high for the SBVH), median over the repetitions [95%], and issue 32's
     goal for it: plain `bvh` ≤ 1.0, a spec with optimize= (build + optimise) ≤ 1.5. A goal is met when
     the whole interval is at most the goal, missed when none of it is."""
-    groups, commands = {}, []
-    for bench_json in bench_jsons:
-        runs = [b for b in json.loads(pathlib.Path(bench_json).read_text())["benchmarks"]
-                if b.get("run_type", "iteration") == "iteration" and b["name"].split("/")[0] in ("BM_BvhBuild", "BM_SbvhBuild")]
-        if not runs:
-            continue
-        mine = {}
-        for b in runs:
-            parts = b["name"].split("/")  # name / scene / threads [/ spec] / iterations:N; scene specs hold no '/'
-            spec = "bvh:builder=spatial" if parts[0] == "BM_SbvhBuild" else (parts[3] if len(parts) > 4 else "bvh")
-            mine.setdefault((parts[1], spec, int(parts[2])), []).append(b)
-        scenes = ";".join(dict.fromkeys(k[0] for k in mine))
+    def case(b):  # name / scene / threads [/ spec] / iterations:N; scene specs hold no '/'
+        parts = b["name"].split("/")
+        spec = "bvh:builder=spatial" if parts[0] == "BM_SbvhBuild" else (parts[3] if len(parts) > 4 else "bvh")
+        return parts[1], spec, int(parts[2])
+
+    def command(bench_json, mine):
         specs = ";".join(dict.fromkeys(k[1] for k in mine if k[1] != "bvh:builder=spatial"))
-        repetitions = max(len(g) for g in mine.values())
-        commands.append(f"RAYLAB_BENCH_BVH_BUILD_SCENES='{scenes}' RAYLAB_BENCH_BVH_BUILD_SPECS='{specs}' "
-                        f"build/experiments/bench_bvh_build --benchmark_repetitions={repetitions} "
-                        f"--benchmark_out={bench_json} --benchmark_out_format=json")
-        groups.update(mine)
+        return (f"RAYLAB_BENCH_BVH_BUILD_SCENES='{';'.join(dict.fromkeys(k[0] for k in mine))}' "
+                f"RAYLAB_BENCH_BVH_BUILD_SPECS='{specs}' build/experiments/bench_bvh_build "
+                f"--benchmark_repetitions={max(len(g) for g in mine.values())} --benchmark_out={bench_json} "
+                "--benchmark_out_format=json")
+
+    groups, commands = grouped_runs(bench_jsons, ("BM_BvhBuild", "BM_SbvhBuild"), case, command)
     if not groups:
         return []
-    md = ["", "## Build time against Embree (bench_bvh_build)", ""]
-    md += [f"`{cmd}`" for cmd in commands]
-    md += ["", "then this script with " + ("that JSON" if len(commands) == 1 else "those JSONs") + " as BENCH_JSON. "
-           "Each repetition builds ours and Embree's in turn 7 times (5 for the SBVH), each in a TBB arena of the "
-           "stated threads, and keeps each one's best wall time; *ours / Embree* is their ratio (< 1: ours builds "
-           "faster), median over the repetitions [95% bootstrap]. Against Embree medium quality, the SBVH against "
-           "Embree high. *SAH / plain*: the tree's SAH cost over plain `bvh`'s on the same scene. Issue 32's goals at "
-           f"10^6 triangles: plain binned `bvh` ≤ {BUILD_GOALS['plain']}, build + optimise ≤ {BUILD_GOALS['optimized']}; "
-           "met when the whole interval is within the goal.", "",
-           "| scene | triangles | structure | threads | ours ms | Embree ms | ours / Embree [95%] | repetitions | "
+    md = measured_by("## Build time against Embree (bench_bvh_build)", commands,
+                     "Each repetition builds ours and Embree's in turn 7 times (5 for the SBVH), each in a TBB arena of "
+                     "the stated threads, and keeps each one's best wall time; *ours / Embree* is their ratio (< 1: ours "
+                     "builds faster), median over the repetitions [95% bootstrap]. Against Embree medium quality, the "
+                     "SBVH against Embree high. *SAH / plain*: the tree's SAH cost over plain `bvh`'s on the same scene. "
+                     f"Issue 32's goals at 10^6 triangles: plain binned `bvh` ≤ {BUILD_GOALS['plain']}, build + optimise "
+                     f"≤ {BUILD_GOALS['optimized']}; met when the whole interval is within the goal.")
+    md += ["", "| scene | triangles | structure | threads | ours ms | Embree ms | ours / Embree [95%] | repetitions | "
            "SAH / plain | goal | met? |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for (scene, spec, threads), g in sorted(groups.items(), key=lambda kv: (kv[0][0], kv[0][2], kv[0][1])):
         m, lo, hi = median_interval([b["vs_embree"] for b in g])
