@@ -153,9 +153,9 @@ def bench_section(bench_jsons: list) -> list:
     ray kind, vs_embree_fast (Embree's fast mode over ours, each the best of 5 alternated passes) median
     [95%] over the repetitions (of every JSON that measures the case), nodes/ray, and (where the JSON
     records them) bytes per triangle, ours and over Embree's."""
-    def case(b):  # BM_BvhTrace / scene / rays / spec / iterations:N; scene specs hold no '/'
+    def case(b):  # BM_BvhTrace / scene / rays / spec / iterations:N; scene specs hold no '/', a spec may
         parts = b["name"].split("/")
-        return parts[1], parts[2].split(":")[0], parts[3]
+        return parts[1], parts[2].split(":")[0], "/".join(parts[3:-1])
 
     def command(bench_json, mine):
         return (f"RAYLAB_BENCH_BVH_SCENES='{';'.join(dict.fromkeys(k[0] for k in mine))}' "
@@ -232,9 +232,9 @@ def build_section(bench_jsons: list) -> list:
     Embree's (medium quality; high for the SBVH), median over the repetitions [95%], and issue 32's
     goal for it: plain `bvh` ≤ 1.0, a spec with optimize= (build + optimise) ≤ 1.5. A goal is met when
     the whole interval is at most the goal, missed when none of it is."""
-    def case(b):  # name / scene / threads [/ spec] / iterations:N; scene specs hold no '/'
+    def case(b):  # name / scene / threads [/ spec] / iterations:N; scene specs hold no '/', a spec may
         parts = b["name"].split("/")
-        spec = "bvh:builder=spatial" if parts[0] == "BM_SbvhBuild" else (parts[3] if len(parts) > 4 else "bvh")
+        spec = "bvh:builder=spatial" if parts[0] == "BM_SbvhBuild" else ("/".join(parts[3:-1]) or "bvh")
         return parts[1], spec, int(parts[2])
 
     def command(bench_json, mine):
