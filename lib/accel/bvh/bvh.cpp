@@ -73,7 +73,10 @@ std::vector<ParamDoc> bvh_params() {
            "grows least, on the binary tree before the wide collapse; leaves unchanged)"},
           {"optimize_passes", "0", "reinsertion passes at most (2% of the interior nodes each); 0 = until the SAH cost "
                                    "improves < 0.1% over 50 passes"},
-          {"optimize_budget", "0", "reinsertion wall time at most, seconds, checked between passes; 0 = no limit"}};
+          {"optimize_budget", "0",
+           "wall time of the reinsertion passes at most, seconds, checked between passes; setting up and writing back "
+           "the tree come on top (0.1 s of passes added 0.17-0.21 s to the build at 1.2e6 triangles, docs/bvh_scale); "
+           "0 = no limit"}};
 }
 
 }  // namespace
