@@ -6,8 +6,6 @@
 #include <cstdio>
 #include <limits>
 #include <map>
-#include <mutex>
-#include <set>
 
 #include "accel/common/accel_factory.h"
 #include "accel/common/ray_sets.h"
@@ -389,10 +387,7 @@ void warn_if_extrapolated(const AutoChoice& choice, double primitives) {
   std::snprintf(widening, sizeof widening, "%.2fx", range_widening(choice.extrapolation_factor));
   const std::string message = "auto: " + std::string(numbers) + " (its choice " + choice.chosen +
                               "); the 90% intervals are widened by " + widening + " (docs/cost_model.md)";
-  static std::mutex mutex;
-  static std::set<std::string> warned;
-  const std::lock_guard lock(mutex);
-  if (warned.insert(message).second) warn_input(message);
+  warn_input_once(message, message);
 }
 
 std::unique_ptr<Aggregate> make_auto(std::shared_ptr<const Scene> scene, SpecReader& r) {

@@ -6,7 +6,6 @@
 #include <limits>
 #include <map>
 #include <mutex>
-#include <set>
 #include <nlohmann/json.hpp>
 
 #include "cost/json_reader.h"
@@ -320,12 +319,10 @@ BuildContext model_build_context(bool warn_outside_range) {
     if (const auto range = m.ranges.find("primitives"); warn_outside_range && range != m.ranges.end()) {
       const FeatureRangeCheck check = check_feature_range("primitives", primitives, range->second);
       // Once per model file and family in a process: a sweep builds many structures.
-      static std::mutex mutex;
-      static std::set<std::string> warned;
-      std::lock_guard lock(mutex);
-      if (check.outside() && warned.insert(resolved + "|" + request.family).second)
-        warn_input("cost=" + request.model + ": " + request.family + " " + check.describe() +
-                   "; its constants are used as they are");
+      if (check.outside())
+        warn_input_once("cost=" + resolved + "|" + request.family,
+                        "cost=" + request.model + ": " + request.family + " " + check.describe() +
+                            "; its constants are used as they are");
     }
     return costs;
   };

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <mutex>
+#include <set>
 
 #include "geometry/input_error.h"
 
@@ -14,6 +15,16 @@ void warn_input(const std::string& message) {
   line += '\n';
   std::lock_guard lock(m);
   std::fputs(line.c_str(), stderr);
+}
+
+void warn_input_once(const std::string& key, const std::string& message) {
+  static std::mutex m;
+  static std::set<std::string> warned;
+  {
+    std::lock_guard lock(m);
+    if (!warned.insert(key).second) return;
+  }
+  warn_input(message);
 }
 
 }  // namespace raylab

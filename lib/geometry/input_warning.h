@@ -10,4 +10,8 @@ namespace raylab {
 /// Prints `message` as one warning line; safe to call from several threads.
 void warn_input(const std::string& message);
 
+/// Prints `message` as warn_input does the first time this process passes `key`, and nothing
+/// after (a sweep or an experiment's rounds build the same structure many times).
+void warn_input_once(const std::string& key, const std::string& message);
+
 }  // namespace raylab
