@@ -120,9 +120,11 @@ void BM_BvhTrace(benchmark::State& state, const std::string& scene_spec, const s
 }
 
 const bool registered = [] {
-  for (const auto& s : scene_specs_from_env("RAYLAB_BENCH_BVH_SCENES", kScenes, scene_for))
+  const auto scenes = scene_specs_from_env("RAYLAB_BENCH_BVH_SCENES", kScenes, scene_for);
+  const auto specs = accelerator_specs_from_env("RAYLAB_BENCH_BVH_SPECS", kBvhSpecs);
+  for (const auto& s : scenes)
     for (const auto& r : kRayKinds)
-      for (const auto& a : accelerator_specs_from_env("RAYLAB_BENCH_BVH_SPECS", kBvhSpecs))
+      for (const auto& a : specs)
         benchmark::RegisterBenchmark(("BM_BvhTrace/" + s + "/" + rays_on(s, r) + "/" + a).c_str(), BM_BvhTrace, s,
                                      rays_on(s, r), a)
             ->Unit(benchmark::kMillisecond)

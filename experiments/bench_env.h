@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "accel/common/accel_factory.h"
@@ -42,17 +44,17 @@ inline std::optional<std::vector<std::string>> list_from_env(const char* variabl
   return items;
 }
 
-/// The ';'-separated scene specs in $`variable`, each made up front through `make` (a spec
-/// make_scene rejects ends the program with one `error:` line naming the variable, and exit
-/// status 2), or `fallback` when it is unset or empty.
-template <class MakeScene>
-std::vector<std::string> scene_specs_from_env(const char* variable, std::vector<std::string> fallback,
-                                              MakeScene&& make) {
+/// The ';'-separated items of $`variable`, each passed to `check` (which throws InputError for an
+/// item it rejects), or `fallback` when the variable is unset or empty. A list of no items or a
+/// rejected item ends the program with one `error:` line naming the variable, and exit status 2.
+template <class Check>
+std::vector<std::string> checked_list_from_env(const char* variable, std::vector<std::string> fallback,
+                                               const std::string& item, Check&& check) {
   const std::optional<std::vector<std::string>> listed = list_from_env(variable);
   if (!listed) return fallback;
   try {
-    if (listed->empty()) throw InputError("no scene spec");
-    for (const auto& spec : *listed) make(spec);
+    if (listed->empty()) throw InputError("no " + item);
+    for (const auto& spec : *listed) check(spec);
   } catch (const InputError& e) {
     std::cerr << "error: $" << variable << ": " << e.what() << "\n";
     std::exit(2);
@@ -60,24 +62,23 @@ std::vector<std::string> scene_specs_from_env(const char* variable, std::vector<
   return *listed;
 }
 
-/// The ';'-separated accelerator specs in $`variable`, or `fallback` when it is unset or empty.
-/// Each is built once over a 20-triangle sphere first: a spec the factory rejects ends the program
-/// with one `error:` line naming the variable, and exit status 2.
+/// The scene specs of $`variable` (checked_list_from_env), each made up front through `make`.
+template <class MakeScene>
+std::vector<std::string> scene_specs_from_env(const char* variable, std::vector<std::string> fallback,
+                                              MakeScene&& make) {
+  return checked_list_from_env(variable, std::move(fallback), "scene spec", make);
+}
+
+/// The accelerator specs of $`variable` (checked_list_from_env), each built once over a 20-triangle
+/// sphere first.
 inline std::vector<std::string> accelerator_specs_from_env(const char* variable, std::vector<std::string> fallback) {
-  const std::optional<std::vector<std::string>> listed = list_from_env(variable);
-  if (!listed) return fallback;
-  const std::vector<std::string>& specs = *listed;
-  try {
-    if (specs.empty()) throw InputError("no accelerator spec");
-    const auto probe = make_scene("sphere:n=20");
-    // cost= models are read and checked, but the probe's size is not held to their fitted range.
-    const BuildContext context = model_build_context(/*warn_outside_range=*/false);
-    for (const auto& spec : specs) make_accelerator(spec, probe, context);
-  } catch (const InputError& e) {
-    std::cerr << "error: $" << variable << ": " << e.what() << "\n";
-    std::exit(2);
-  }
-  return specs;
+  std::shared_ptr<const Scene> probe;
+  // cost= models are read and checked, but the probe's size is not held to their fitted range.
+  const BuildContext context = model_build_context(/*warn_outside_range=*/false);
+  return checked_list_from_env(variable, std::move(fallback), "accelerator spec", [&](const std::string& spec) {
+    if (!probe) probe = make_scene("sphere:n=20");
+    make_accelerator(spec, probe, context);
+  });
 }
 
 }  // namespace raylab
