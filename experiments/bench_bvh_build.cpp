@@ -14,9 +14,9 @@
 //      ours_ms, embree_ms, bytes_per_tri, embree_bytes_per_tri, sah_cost, triangles (the scene's primitives)
 //   build/experiments/bench_bvh_build
 //   build/experiments/bench_bvh_build --benchmark_filter='BM_BvhBuild/.*/1'
-//   RAYLAB_BENCH_BVH_BUILD_SCENES='subdivided:of=cgal:bunny00,levels=2' \
-//   RAYLAB_BENCH_BVH_BUILD_SPECS='bvh;bvh:optimize=reinsert,optimize_budget=0.1' build/experiments/bench_bvh_build
-//     (other scenes and specs, ';'-separated; `bvh` keeps the name without a spec)
+//   RAYLAB_BENCH_BVH_BUILD_SCENES='subdivided:of=cgal:bunny00,levels=2'
+//     RAYLAB_BENCH_BVH_BUILD_SPECS='bvh;bvh:optimize=reinsert,optimize_budget=0.1' build/experiments/bench_bvh_build
+//     (one command line; other scenes and specs, ';'-separated; `bvh` keeps the name without a spec)
 #include <benchmark/benchmark.h>
 #include <tbb/task_arena.h>
 
