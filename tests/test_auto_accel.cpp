@@ -286,6 +286,35 @@ TEST(AutoAccel, ARepeatedChoiceOutsideTheRangeWarnsOnce) {
   EXPECT_EQ(warnings.find(line, at + 1), std::string::npos) << "warned twice: " << warnings;
 }
 
+// The scene's effect b̂ is voted by the scene-level models fitted on scenes of its size when at
+// least kAutoEffectMinVoters are: a model narrowed to scenes twice as large no longer votes, nor
+// widens the intervals or warns. With fewer such models every model votes, as before.
+TEST(AutoAccel, OnlyModelsFittedOnTheScenesSizeVoteOnItsEffect) {
+  static_assert(kAutoEffectMinVoters == 3);
+  CostModelSet base = read_model_file(tiny_model());
+  // A fourth voter: bvh's scene-level models and effects again under another spec.
+  base.scene_trace["bvh:leaf_size=8"] = base.scene_trace.at("bvh");
+  base.trace_effects.by_spec["bvh:leaf_size=8"] = base.trace_effects.by_spec.at("bvh");
+  auto with_narrowed = [&](const std::vector<std::string>& specs, const std::string& name) {
+    CostModelSet set = base;
+    for (const std::string& spec : specs)
+      for (auto& [cls, m] : set.scene_trace.at(spec)) m.range_lo = 5000, m.range_hi = 6000;
+    const std::string path = (scratch_dir() / name).string();
+    write_model_file(set, path);
+    return path;
+  };
+  const auto scene = make_scene("soup:n=2500");  // inside the tiny sweep's 300..6000, 2x below 5000
+  testing::internal::CaptureStderr();
+  const auto three_in_range =
+      make_accelerator("auto:model=" + with_narrowed({"kdtree"}, "model_one_narrowed.json") + ",rays=diffuse", scene);
+  const std::string warnings = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(choice_of(*three_in_range).extrapolation_factor, 1.0);
+  EXPECT_EQ(warnings.find("lie outside the range"), std::string::npos) << warnings;
+  const auto two_in_range = make_accelerator(
+      "auto:model=" + with_narrowed({"kdtree", "grid:d=1"}, "model_two_narrowed.json") + ",rays=diffuse", scene);
+  EXPECT_NEAR(choice_of(*two_in_range).extrapolation_factor, 2.0, 1e-9);
+}
+
 TEST(AutoAccel, InstancedScenesChooseForEachPart) {
   const auto scene = make_scene("instances:of=(sphere:n=800),count=6");
   const auto accel = make_accelerator("auto:model=" + tiny_model() + ",rays=primary,count=5000", scene);

@@ -186,8 +186,9 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   for (const auto& [spec, m] : models.scene_trace) trace_by_key.emplace(canonical_key(spec), &m);
   // The spec effects (spec_trace_effects.h) of at least kAutoEffectMinScenes scenes, and per ray
   // class the scene's effect b̂: the median vote ln t̂_s - a_s of the specs with a scene-level
-  // model and an effect, with the median of their intervals' half-widths (log units) and their
-  // largest extrapolation factor.
+  // model and an effect, with the median of their intervals' half-widths (log units). Only the
+  // models fitted on scenes of this size vote when at least kAutoEffectMinVoters of them do
+  // (extrapolation factor 1); else every model votes, and b̂ carries their largest factor.
   std::map<std::string, const std::map<std::string, SpecTraceEffect>*> effect_by_key;
   for (const auto& [spec, m] : models.trace_effects.by_spec) effect_by_key.emplace(canonical_key(spec), &m);
   auto effect_of = [&](const std::string& key, const std::string& cls) -> const SpecTraceEffect* {
@@ -201,19 +202,28 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
   };
   std::map<std::string, SceneEffect> scene_effect;
   for (const std::string& cls : classes) {
-    std::vector<double> votes, half_widths;
-    double extrapolation = 1.0;
+    std::vector<SceneEffect> all, in_range;  // one vote per model
     for (const auto& [key, by_class] : trace_by_key) {
       const SpecTraceEffect* e = effect_of(key, cls);
       const auto m = by_class->find(cls);
       if (!e || m == by_class->end()) continue;
       const double t = m->second.predict(trace_x);
       if (!(t > 0) || !std::isfinite(t)) continue;  // a linear model can predict no time at all
-      votes.push_back(std::log(t) - e->effect);
-      half_widths.push_back(std::log(m->second.interval90(trace_x, sf.primitives).second / t));
-      extrapolation = std::max(extrapolation, m->second.extrapolation_factor(sf.primitives));
+      const SceneEffect v{std::log(t) - e->effect, std::log(m->second.interval90(trace_x, sf.primitives).second / t),
+                   m->second.extrapolation_factor(sf.primitives)};
+      all.push_back(v);
+      if (!(v.extrapolation_factor > 1.0)) in_range.push_back(v);
     }
-    if (!votes.empty()) scene_effect[cls] = {median(votes), median(half_widths), extrapolation};
+    const std::vector<SceneEffect>& voters = in_range.size() >= kAutoEffectMinVoters ? in_range : all;
+    if (voters.empty()) continue;
+    std::vector<double> votes, half_widths;
+    double extrapolation = 1.0;
+    for (const SceneEffect& v : voters) {
+      votes.push_back(v.b);
+      half_widths.push_back(v.log_half_width);
+      extrapolation = std::max(extrapolation, v.extrapolation_factor);
+    }
+    scene_effect[cls] = {median(votes), median(half_widths), extrapolation};
   }
   std::vector<AutoCandidate> candidates;
   std::vector<std::pair<double, double>> upper;  // each candidate's 90% upper build s and ns per ray

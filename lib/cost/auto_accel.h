@@ -17,7 +17,8 @@
 /// its ns per ray, and keeps the candidate of least predicted build + N × trace time; candidates
 /// the model has no entry for (by accel_spec_key.h) are skipped. A candidate's ns per ray is
 /// exp(a + b̂) where the model has its spec effect a from at least kAutoEffectMinScenes scenes
-/// (spec_trace_effects.h: b̂ the scene's effect, voted by every scene-level model), else its own
+/// (spec_trace_effects.h: b̂ the scene's effect, voted by the scene-level models fitted on scenes
+/// of its size when at least kAutoEffectMinVoters are, else by every one), else its own
 /// scene-level prediction. It builds that one, then races the
 /// others whose 90% interval of the total overlaps its own, in the order of their predicted totals,
 /// as long as the race's estimated cost (each racer's build and sample passes at the upper ends of
@@ -43,6 +44,10 @@ namespace raylab {
 inline constexpr std::size_t kAutoBspMaxPrimitives = std::size_t{1} << 15;
 /// The fewest scenes a spec effect (spec_trace_effects.h) is measured on for `auto` to use it.
 inline constexpr std::size_t kAutoEffectMinScenes = 2;
+/// The fewest scene-level models fitted on the scene's size (extrapolation factor 1) that vote on
+/// its effect b̂ alone; with fewer, every model votes. A model outside its range of primitives
+/// votes a time it has no data for, and its factor would widen every candidate's interval.
+inline constexpr std::size_t kAutoEffectMinVoters = 3;
 /// The rays each racing candidate is timed on (split evenly over the kinds of `mixed`): a
 /// thousandth of the count, within [kAutoSampleRays, kAutoSampleMaxRays].
 inline constexpr std::size_t kAutoSampleRays = 384;

@@ -10,8 +10,8 @@
 /// (scene_trace_model.h) predicts its absolute time from the scene's features, fitted on the
 /// scenes the plan gave that spec; held out, they err by tens of per cent (each one's
 /// held_out.mape in model.json), and ranking two specs by two such predictions adds both
-/// errors. With the effects, every scene-level model votes on the new scene's b, b̂ = median
-/// over specs s of (ln t̂_s - a_s), and each candidate is predicted as exp(a_c + b̂): the
+/// errors. With the effects, the scene-level models vote on the new scene's b, b̂ = median
+/// over specs s of (ln t̂_s - a_s) (those fitted on scenes of its size, auto_accel.h), and each candidate is predicted as exp(a_c + b̂): the
 /// candidates' differences come from paired measurements on shared scenes.
 ///
 /// Fit: least squares by backfitting (alternating means of the residuals over the rows of each b
