@@ -210,7 +210,7 @@ std::unique_ptr<Aggregate> choose_predicted(const std::shared_ptr<const Scene>& 
       const double t = m->second.predict(trace_x);
       if (!(t > 0) || !std::isfinite(t)) continue;  // a linear model can predict no time at all
       const SceneEffect v{std::log(t) - e->effect, std::log(m->second.interval90(trace_x, sf.primitives).second / t),
-                   m->second.extrapolation_factor(sf.primitives)};
+                          m->second.extrapolation_factor(sf.primitives)};
       all.push_back(v);
       if (!(v.extrapolation_factor > 1.0)) in_range.push_back(v);
     }

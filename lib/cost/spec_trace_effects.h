@@ -11,8 +11,9 @@
 /// scenes the plan gave that spec; held out, they err by tens of per cent (each one's
 /// held_out.mape in model.json), and ranking two specs by two such predictions adds both
 /// errors. With the effects, the scene-level models vote on the new scene's b, b̂ = median
-/// over specs s of (ln t̂_s - a_s) (those fitted on scenes of its size, auto_accel.h), and each candidate is predicted as exp(a_c + b̂): the
-/// candidates' differences come from paired measurements on shared scenes.
+/// over specs s of (ln t̂_s - a_s) (the models fitted on scenes of its size, auto_accel.h), and
+/// each candidate is predicted as exp(a_c + b̂): the candidates' differences come from paired
+/// measurements on shared scenes.
 ///
 /// Fit: least squares by backfitting (alternating means of the residuals over the rows of each b
 /// and each a, from a = 0, until no effect moves by more than 1e-9), on the fastest time of each
