@@ -141,6 +141,14 @@ def grouped_runs(bench_jsons: list, names: tuple, case, command):
     return groups, commands
 
 
+def bench_command(binary: str, variable: str, scenes: list, specs: list, bench_json: str, mine: dict) -> str:
+    """The command that wrote `bench_json`: `binary` on `scenes` and `specs` (each once, in order) through
+    $`variable`_SCENES and _SPECS, with as many repetitions as its largest group in `mine`."""
+    return (f"{variable}_SCENES='{';'.join(dict.fromkeys(scenes))}' {variable}_SPECS='{';'.join(dict.fromkeys(specs))}' "
+            f"build/experiments/{binary} --benchmark_repetitions={max(len(g) for g in mine.values())} "
+            f"--benchmark_out={bench_json} --benchmark_out_format=json")
+
+
 def measured_by(title: str, commands: list, method: str) -> list:
     """A section's title, the commands that measured its JSONs, and how: `method`."""
     return (["", title, ""] + [f"`{cmd}`" for cmd in commands] +
@@ -158,10 +166,8 @@ def bench_section(bench_jsons: list) -> list:
         return parts[1], parts[2].split(":")[0], "/".join(parts[3:-1])
 
     def command(bench_json, mine):
-        return (f"RAYLAB_BENCH_BVH_SCENES='{';'.join(dict.fromkeys(k[0] for k in mine))}' "
-                f"RAYLAB_BENCH_BVH_SPECS='{';'.join(dict.fromkeys(k[2] for k in mine))}' build/experiments/bench_bvh "
-                f"--benchmark_repetitions={max(len(g) for g in mine.values())} --benchmark_out={bench_json} "
-                "--benchmark_out_format=json")
+        return bench_command("bench_bvh", "RAYLAB_BENCH_BVH", [k[0] for k in mine], [k[2] for k in mine], bench_json,
+                             mine)
 
     groups, commands = grouped_runs(bench_jsons, ("BM_BvhTrace",), case, command)
     if not groups:
@@ -238,11 +244,8 @@ def build_section(bench_jsons: list) -> list:
         return parts[1], spec, int(parts[2])
 
     def command(bench_json, mine):
-        specs = ";".join(dict.fromkeys(k[1] for k in mine if k[1] != "bvh:builder=spatial"))
-        return (f"RAYLAB_BENCH_BVH_BUILD_SCENES='{';'.join(dict.fromkeys(k[0] for k in mine))}' "
-                f"RAYLAB_BENCH_BVH_BUILD_SPECS='{specs}' build/experiments/bench_bvh_build "
-                f"--benchmark_repetitions={max(len(g) for g in mine.values())} --benchmark_out={bench_json} "
-                "--benchmark_out_format=json")
+        return bench_command("bench_bvh_build", "RAYLAB_BENCH_BVH_BUILD", [k[0] for k in mine],
+                             [k[1] for k in mine if k[1] != "bvh:builder=spatial"], bench_json, mine)
 
     groups, commands = grouped_runs(bench_jsons, ("BM_BvhBuild", "BM_SbvhBuild"), case, command)
     if not groups:
