@@ -28,8 +28,8 @@ bool box_contains(const Bounds3f& outer, const Bounds3f& inner) {
 }
 
 template <int N>
-void check_collapse(const Scene& scene, const Bvh2& tree) {
-  const WideBvh<N> wide = collapse_bvh<N>(tree, scene);
+void check_collapse(const Scene& scene, const Bvh2& tree, const WideCollapseOptions& options) {
+  const WideBvh<N> wide = collapse_bvh<N>(tree, scene, options);
   ASSERT_FALSE(wide.nodes.empty());
   std::vector<std::uint32_t> seen;
   std::vector<std::pair<std::uint32_t, Bounds3f>> todo = {{0u, tree.nodes[0].box}};
@@ -88,10 +88,64 @@ TEST(WideBvh, CollapsePreservesReferencesAndNestsBoxes) {
       config.threads = 1;
       const Bvh2 tree = build_bvh(*scene, config);
       SCOPED_TRACE(std::string(spec) + " leaf_size=" + std::to_string(leaf));
-      check_collapse<4>(*scene, tree);
-      check_collapse<8>(*scene, tree);
+      for (const BvhCollapse method : {BvhCollapse::greedy, BvhCollapse::sah}) {
+        WideCollapseOptions options;
+        options.method = method;
+        options.max_leaf_primitives = static_cast<std::uint32_t>(leaf) * 2;  // merges beyond the binary leaves
+        check_collapse<4>(*scene, tree, options);
+        check_collapse<8>(*scene, tree, options);
+      }
     }
   }
+}
+
+/// The SAH collapse minimises the wide SAH over the collapses of the binary tree, of which the
+/// greedy one is one: it never costs more, and where it merges leaves or shares lanes
+/// differently it costs less. Its merged leaves hold at most max_leaf_primitives references.
+template <int N>
+void check_sah_collapse(const Scene& scene, const Bvh2& tree, double c_node, double& greedy_sum, double& sah_sum) {
+  WideCollapseOptions options;
+  options.c_node = c_node;
+  options.max_leaf_primitives = 16;
+  options.method = BvhCollapse::greedy;
+  const double greedy = wide_sah_cost(collapse_bvh<N>(tree, scene, options), options);
+  options.method = BvhCollapse::sah;
+  const WideBvh<N> sah = collapse_bvh<N>(tree, scene, options);
+  EXPECT_LE(wide_sah_cost(sah, options), greedy * (1 + 1e-5));
+  greedy_sum += greedy;
+  sah_sum += wide_sah_cost(sah, options);
+  std::uint32_t largest_binary_leaf = 0;
+  for (const Bvh2Node& n : tree.nodes)
+    if (n.is_leaf()) largest_binary_leaf = std::max(largest_binary_leaf, n.count);
+  for (const WideBvhNode<N>& node : sah.nodes)
+    for (std::uint32_t i = 0; i < node.used; ++i)
+      if (WideRef::is_leaf(node.child[i])) {
+        int references = 0;
+        for (std::uint32_t p = WideRef::first(node.child[i]); p < WideRef::first(node.child[i]) + WideRef::count(node.child[i]); ++p)
+          references += sah.packets[p].size();
+        EXPECT_LE(static_cast<std::uint32_t>(references), std::max<std::uint32_t>(16, largest_binary_leaf));
+      }
+}
+
+TEST(WideBvh, SahCollapseCostsNoMoreThanGreedy) {
+  double greedy_sum = 0, sah_sum = 0;
+  for (const char* spec : {"soup:n=3000", "sphereflake:depth=2", "walls:n=60,angle=30", "grass:blades=300",
+                           "decimated:of=cgal:bunny00,faces=4000"}) {
+    const auto scene = make_scene(spec);
+    for (const int leaf : {1, 4, 16}) {
+      BvhConfig config;
+      config.max_leaf_size = leaf;
+      config.cost.leaf_block = kPacketWidth;
+      config.threads = 1;
+      const Bvh2 tree = build_bvh(*scene, config);
+      for (const double c_node : {0.5, 3.0}) {
+        SCOPED_TRACE(std::string(spec) + " leaf_size=" + std::to_string(leaf) + " c_node=" + std::to_string(c_node));
+        check_sah_collapse<4>(*scene, tree, c_node, greedy_sum, sah_sum);
+        check_sah_collapse<8>(*scene, tree, c_node, greedy_sum, sah_sum);
+      }
+    }
+  }
+  EXPECT_LT(sah_sum, 0.98 * greedy_sum);  // it does find cheaper trees
 }
 
 /// Boxes and rays built to hit the NaN and boundary cases of the slab test: axis-parallel rays

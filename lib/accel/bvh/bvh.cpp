@@ -12,10 +12,13 @@ Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
     : scene_(std::move(scene)), config_(config), tree_(build_bvh(*scene_, config_)), bounds_(scene_->bounds()) {
   build_sah_cost_ = bvh_sah_cost(tree_, config_.cost);
   const bool quantized = config_.nodes == BvhNodes::quantized;
-  if (config_.width == 4 && !quantized) wide4_ = collapse_bvh<4>(tree_, *scene_);
-  if (config_.width == 8 && !quantized) wide8_ = collapse_bvh<8>(tree_, *scene_);
-  if (config_.width == 4 && quantized) quantized4_ = quantize_wide_bvh(collapse_bvh<4>(tree_, *scene_));
-  if (config_.width == 8 && quantized) quantized8_ = quantize_wide_bvh(collapse_bvh<8>(tree_, *scene_));
+  WideCollapseOptions collapse;
+  collapse.method = config_.collapse;
+  collapse.max_leaf_primitives = static_cast<std::uint32_t>(config_.max_leaf_size);
+  if (config_.width == 4 && !quantized) wide4_ = collapse_bvh<4>(tree_, *scene_, collapse);
+  if (config_.width == 8 && !quantized) wide8_ = collapse_bvh<8>(tree_, *scene_, collapse);
+  if (config_.width == 4 && quantized) quantized4_ = quantize_wide_bvh(collapse_bvh<4>(tree_, *scene_, collapse));
+  if (config_.width == 8 && quantized) quantized8_ = quantize_wide_bvh(collapse_bvh<8>(tree_, *scene_, collapse));
   if (config_.width != 2 && config_.leaves == BvhLeaves::indexed) {
     std::vector<TrianglePacket>& packets = config_.width == 4 ? (quantized ? quantized4_.packets : wide4_.packets)
                                                               : (quantized ? quantized8_.packets : wide8_.packets);
@@ -35,8 +38,21 @@ AccelStats Bvh::stats() const {
           build_sah_cost_};
 }
 
+namespace {
+
+/// Folds the wide tree's topology (each node's child references and lane count) into `h`.
+template <class Nodes>
+std::uint64_t hash_wide_topology(const Nodes& nodes, std::uint64_t h) {
+  for (const auto& node : nodes) h = fnv1a(&node.used, sizeof node.used, fnv1a(node.child, sizeof node.child, h));
+  return h;
+}
+
+}  // namespace
+
 std::optional<std::uint64_t> Bvh::structure_hash() const {
-  return fnv1a(tree_.prims, fnv1a(tree_.nodes));
+  std::uint64_t h = fnv1a(tree_.prims, fnv1a(tree_.nodes));
+  h = hash_wide_topology(wide4_.nodes, hash_wide_topology(wide8_.nodes, h));
+  return hash_wide_topology(quantized4_.nodes, hash_wide_topology(quantized8_.nodes, h));
 }
 
 namespace {
@@ -44,6 +60,7 @@ namespace {
 const std::vector<std::string> kBuilders = {"midpoint", "median", "sweep", "binned", "spatial"};
 const std::vector<std::string> kWidths = {"2", "4", "8"};
 const std::vector<std::string> kOptimizations = {"none", "reinsert"};
+const std::vector<std::string> kCollapses = {"greedy", "sah"};
 const std::vector<std::string> kNodeKinds = {"full", "quantized"};
 const std::vector<std::string> kLeafKinds = {"packed", "indexed"};
 
@@ -58,6 +75,9 @@ std::vector<ParamDoc> bvh_params() {
           {"alpha", "1e-5", "SBVH: try spatial splits where child overlap exceeds alpha * SA(root)"},
           {"max_duplication", "1", "SBVH: at most (1 + max_duplication) * N references"},
           {"width", "8", "children per node: 2 (binary, scalar) | 4 | 8 (collapsed, SIMD box tests, packed leaves)"},
+          {"collapse", "sah",
+           "sah (the wide tree of least SAH cost over all collapses of the binary one, small subtrees merged into "
+           "leaves; Ylitie et al. 2017) | greedy (open the child of largest area until the node is full; width 4 or 8)"},
           {"nodes", "full",
            "full (float child boxes) | quantized (8-bit child boxes relative to the node's, enlarged outward: "
            "half the node bytes, same first hits; width 4 or 8)"},
@@ -110,6 +130,7 @@ BvhConfig read_bvh_config(SpecReader& r) {
   c.cost.leaf_block = c.width == 2 ? 1u : static_cast<unsigned>(kPacketWidth);
   c.spatial_alpha = r.get_double("alpha", 1e-5, 0.0, 1.0);
   c.max_duplication = r.get_double("max_duplication", 1.0, 0.0, 16.0);
+  c.collapse = r.get_choice("collapse", "sah", kCollapses) == "greedy" ? BvhCollapse::greedy : BvhCollapse::sah;
   c.nodes = r.get_choice("nodes", "full", kNodeKinds) == "quantized" ? BvhNodes::quantized : BvhNodes::full;
   if (c.nodes == BvhNodes::quantized && c.width == 2)
     throw InputError("accelerator '" + r.spec().text + "': nodes=quantized needs a wide tree (width=4 or 8)");
@@ -160,7 +181,8 @@ AccelKind make_bvh_kind() {
            "builder=sweep", "cost=default", "width=2,cost=default", "kernel=watertight", "kernel=watertight,width=4",
            "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2", "nodes=quantized",
            "nodes=quantized,width=4,robust=off", "nodes=quantized,kernel=watertight", "leaves=indexed",
-           "leaves=indexed,nodes=quantized", "leaves=indexed,width=4,robust=off", "leaves=indexed,kernel=watertight"}};
+           "leaves=indexed,nodes=quantized", "leaves=indexed,width=4,robust=off", "leaves=indexed,kernel=watertight", "collapse=greedy",
+           "collapse=greedy,width=4,robust=off"}};
 }
 
 namespace {

@@ -28,6 +28,12 @@ enum class BvhNodes {
   quantized,  ///< 8-bit boxes relative to the node's own, enlarged outward (quantized_wide_node.h)
 };
 
+/// How the binary tree is collapsed into the wide one (wide_bvh.h).
+enum class BvhCollapse {
+  greedy,  ///< each wide node opens its interior child of largest area until it has N children
+  sah,     ///< the collapse of least wide SAH cost, leaves merged where cheaper (dynamic programming)
+};
+
 /// What a wide tree's leaves hold.
 enum class BvhLeaves {
   packed,   ///< TrianglePackets: each triangle's vertices copied, SoA (packed_triangles.h)
@@ -80,6 +86,8 @@ struct BvhConfig {
   /// writing the tree back are not counted: 0.1 s of passes added 0.17-0.21 s to the build at
   /// 1.2·10^6 triangles (docs/bvh_scale, bench_bvh_build).
   double optimize_budget = 0.0;
+  /// How the wide tree (width 4 or 8) is collapsed from the binary one.
+  BvhCollapse collapse = BvhCollapse::sah;
   /// Child boxes of the wide tree (width 4 or 8).
   BvhNodes nodes = BvhNodes::full;
   /// Leaves of the wide tree (width 4 or 8).

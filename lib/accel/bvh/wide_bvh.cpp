@@ -3,6 +3,7 @@
 #include "accel/common/huge_pages.h"
 
 #include <limits>
+#include <optional>
 #include <span>
 #include <stdexcept>
 
@@ -10,50 +11,116 @@ namespace raylab {
 
 namespace {
 
+/// The wide SAH over the collapses of a binary tree (Ylitie, Karras and Laine 2017, §3.1). For a
+/// binary node n of box area A(n) and k in [1, N], cost(n, k) is the least SAH cost of n's
+/// subtree placed in at most k lanes of one wide node:
+///   cost(n, 1) = min(c_packet·A(n)·packets(n) if n may be a leaf, c_node·A(n) + split(n, N)),
+///   cost(n, k) = min(cost(n, k - 1), split(n, k)),
+///   split(n, k) = min over i in [1, k) of cost(left(n), i) + cost(right(n), k - i),
+/// where a binary leaf is always a leaf, and an interior node may be one when its subtree holds
+/// at most max_leaf_primitives primitives (packets(n): its triangles and spheres each in whole
+/// packets, as pack_leaf packs them).
+template <int N>
+class SahCollapse {
+ public:
+  struct Entry {
+    float cost[N];          ///< cost[k - 1] = cost(n, k)
+    std::uint8_t lanes[N];  ///< the lanes cost[k - 1] takes: 1 (n itself), or j >= 2 (split(n, j))
+    std::uint8_t left[N];   ///< left[j - 1], j >= 2: the lanes of split(n, j) given to the left child
+    std::uint32_t triangles, spheres;
+    bool leaf;  ///< in one lane, n is a leaf
+  };
+
+  SahCollapse(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options)
+      : tree_(tree), scene_(scene), options_(options), entries_(tree.nodes.size()) {
+    fill(0);
+  }
+
+  const Entry& operator[](std::uint32_t node) const { return entries_[node]; }
+
+ private:
+  void fill(std::uint32_t index) {
+    const Bvh2Node& node = tree_.nodes[index];
+    Entry& e = entries_[index];
+    const float area = node.box.surface_area();
+    if (node.is_leaf()) {
+      e.spheres = 0;
+      for (std::uint32_t k = 0; k < node.count; ++k) e.spheres += scene_.is_sphere(tree_.prims[node.first + k]);
+      e.triangles = node.count - e.spheres;
+      e.leaf = true;
+      for (int k = 0; k < N; ++k) e.cost[k] = leaf_cost(area, e), e.lanes[k] = 1, e.left[k] = 0;
+      return;
+    }
+    fill(node.first);
+    fill(node.first + 1);
+    const Entry& l = entries_[node.first];
+    const Entry& r = entries_[node.first + 1];
+    e.triangles = l.triangles + r.triangles;
+    e.spheres = l.spheres + r.spheres;
+    float split[N + 1];
+    e.left[0] = 0;
+    for (int j = 2; j <= N; ++j) {
+      split[j] = std::numeric_limits<float>::infinity();
+      e.left[j - 1] = 1;
+      for (int i = 1; i < j; ++i)
+        if (const float c = l.cost[i - 1] + r.cost[j - i - 1]; c < split[j]) {
+          split[j] = c;
+          e.left[j - 1] = static_cast<std::uint8_t>(i);
+        }
+    }
+    const float interior = static_cast<float>(options_.c_node) * area + split[N];
+    const bool may_be_leaf = e.triangles + e.spheres <= options_.max_leaf_primitives;
+    e.leaf = may_be_leaf && leaf_cost(area, e) < interior;
+    e.cost[0] = e.leaf ? leaf_cost(area, e) : interior;
+    e.lanes[0] = 1;
+    for (int k = 2; k <= N; ++k) {
+      const bool split_k = split[k] < e.cost[k - 2];
+      e.cost[k - 1] = split_k ? split[k] : e.cost[k - 2];
+      e.lanes[k - 1] = split_k ? static_cast<std::uint8_t>(k) : e.lanes[k - 2];
+    }
+  }
+
+  float leaf_cost(float area, const Entry& e) const {
+    const std::uint32_t packets = (e.triangles + kPacketWidth - 1) / kPacketWidth + (e.spheres + kPacketWidth - 1) / kPacketWidth;
+    return static_cast<float>(options_.c_packet) * area * static_cast<float>(packets);
+  }
+
+  const Bvh2& tree_;
+  const Scene& scene_;
+  const WideCollapseOptions& options_;
+  std::vector<Entry> entries_;
+};
+
 template <int N>
 class Collapser {
  public:
-  Collapser(const Bvh2& tree, const Scene& scene, WideBvh<N>& out) : tree_(tree), scene_(scene), out_(out) {}
+  Collapser(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options, WideBvh<N>& out)
+      : tree_(tree), scene_(scene), out_(out) {
+    if (options.method == BvhCollapse::sah) sah_.emplace(tree, scene, options);
+  }
 
   /// Emits the wide node replacing binary node `index` and returns its index in out_.nodes.
   /// A binary leaf at the root becomes a wide node with one leaf child.
   std::uint32_t emit(std::uint32_t index) {
     const std::uint32_t self = static_cast<std::uint32_t>(out_.nodes.size());
     out_.nodes.emplace_back();
-    std::uint32_t kids[N];
+    Child kids[N];
     int n = 0;
     const Bvh2Node& node = tree_.nodes[index];
     if (node.is_leaf()) {
-      kids[n++] = index;
+      kids[n++] = {index, true};
+    } else if (sah_) {
+      const int left = (*sah_)[index].left[N - 1];
+      place(node.first, left, kids, n);
+      place(node.first + 1, N - left, kids, n);
     } else {
-      kids[n++] = node.first;
-      kids[n++] = node.first + 1;
-      while (n < N) {
-        int widest = -1;
-        float widest_area = -1.0f;
-        for (int i = 0; i < n; ++i) {
-          const Bvh2Node& c = tree_.nodes[kids[i]];
-          if (c.is_leaf()) continue;
-          const float area = c.box.surface_area();
-          if (area > widest_area) {
-            widest_area = area;
-            widest = i;
-          }
-        }
-        if (widest < 0) break;
-        const std::uint32_t opened = kids[widest];
-        kids[widest] = tree_.nodes[opened].first;
-        kids[n++] = tree_.nodes[opened].first + 1;
-      }
+      n = greedy_children(node, kids);
     }
     std::uint32_t refs[N];
-    for (int i = 0; i < n; ++i) {
-      const Bvh2Node& c = tree_.nodes[kids[i]];
-      refs[i] = c.is_leaf() ? leaf(c) : emit(kids[i]);
-    }
+    for (int i = 0; i < n; ++i) refs[i] = kids[i].leaf ? leaf(kids[i].node) : emit(kids[i].node);
     WideBvhNode<N>& w = out_.nodes[self];
     for (int i = 0; i < N; ++i) {
-      const Bounds3f b = i < n ? tree_.nodes[kids[i]].box : Bounds3f{};
+      const Bounds3f b = i < n ? tree_.nodes[kids[i].node].box : Bounds3f{};
       for (int a = 0; a < 3; ++a) {
         w.bounds[a][i] = b.lo[a];
         w.bounds[3 + a][i] = b.hi[a];
@@ -65,29 +132,93 @@ class Collapser {
   }
 
  private:
-  std::uint32_t leaf(const Bvh2Node& c) {
+  /// A lane of a wide node: binary node `node`, as a leaf (a binary leaf, or its subtree merged)
+  /// or as the wide node replacing it.
+  struct Child {
+    std::uint32_t node;
+    bool leaf;
+  };
+
+  /// The binary node's two children, then the interior child of largest area opened, repeatedly.
+  int greedy_children(const Bvh2Node& node, Child (&kids)[N]) const {
+    int n = 0;
+    kids[n++] = {node.first, tree_.nodes[node.first].is_leaf()};
+    kids[n++] = {node.first + 1, tree_.nodes[node.first + 1].is_leaf()};
+    while (n < N) {
+      int widest = -1;
+      float widest_area = -1.0f;
+      for (int i = 0; i < n; ++i) {
+        if (kids[i].leaf) continue;
+        const float area = tree_.nodes[kids[i].node].box.surface_area();
+        if (area > widest_area) {
+          widest_area = area;
+          widest = i;
+        }
+      }
+      if (widest < 0) break;
+      const std::uint32_t first = tree_.nodes[kids[widest].node].first;
+      kids[widest] = {first, tree_.nodes[first].is_leaf()};
+      kids[n++] = {first + 1, tree_.nodes[first + 1].is_leaf()};
+    }
+    return n;
+  }
+
+  /// Appends the lanes the SAH collapse gives binary node `index` within at most `lanes` lanes.
+  void place(std::uint32_t index, int lanes, Child (&kids)[N], int& n) const {
+    const auto& e = (*sah_)[index];
+    const int used = e.lanes[lanes - 1];
+    if (used == 1) {
+      kids[n++] = {index, e.leaf};
+      return;
+    }
+    const int left = e.left[used - 1];
+    place(tree_.nodes[index].first, left, kids, n);
+    place(tree_.nodes[index].first + 1, used - left, kids, n);
+  }
+
+  /// Packs the references of binary node `index`'s subtree into one leaf.
+  std::uint32_t leaf(std::uint32_t index) {
+    const Bvh2Node& c = tree_.nodes[index];
+    std::span<const std::uint32_t> prims(tree_.prims.data() + c.first, c.count);
+    if (!c.is_leaf()) {
+      merged_.clear();
+      gather(index);
+      prims = merged_;
+    }
     const std::size_t first = out_.packets.size();
-    const std::uint32_t count =
-        pack_leaf(scene_, std::span<const std::uint32_t>(tree_.prims.data() + c.first, c.count), out_.packets);
+    const std::uint32_t count = pack_leaf(scene_, prims, out_.packets);
     if (count > WideRef::kMaxLeafPackets || first + count > WideRef::kFirstMask + 1)
       throw std::length_error("wide BVH: leaf or packet array too large for the reference encoding");
     return WideRef::leaf(static_cast<std::uint32_t>(first), count);
   }
 
+  void gather(std::uint32_t index) {
+    const Bvh2Node& c = tree_.nodes[index];
+    if (c.is_leaf()) {
+      merged_.insert(merged_.end(), tree_.prims.begin() + c.first, tree_.prims.begin() + c.first + c.count);
+      return;
+    }
+    gather(c.first);
+    gather(c.first + 1);
+  }
+
   const Bvh2& tree_;
   const Scene& scene_;
   WideBvh<N>& out_;
+  std::optional<SahCollapse<N>> sah_;
+  std::vector<std::uint32_t> merged_;  ///< a merged leaf's references
 };
 
 }  // namespace
 
 template <int N>
-WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene) {
+WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options) {
   WideBvh<N> out;
   if (tree.nodes.empty()) return out;
   // Reserved once and never shrunk: a shrink copies the whole array into freshly faulted pages,
   // which measured ~5% of the build. Each wide node replaces at least one binary interior node
-  // (at most one node for a binary leaf at the root); the packet count is exact.
+  // (at most one node for a binary leaf at the root); the packets are at most those of the
+  // binary leaves packed one by one (a merged leaf may fill its packets better).
   std::size_t packets = 0;
   for (const Bvh2Node& n : tree.nodes) {
     if (!n.is_leaf()) continue;
@@ -100,11 +231,28 @@ WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene) {
   advise_huge_pages(out.nodes.data(), out.nodes.capacity() * sizeof(WideBvhNode<N>));
   advise_huge_pages(out.packets.data(), out.packets.capacity() * sizeof(TrianglePacket));
   out.root_box = tree.nodes[0].box;
-  Collapser<N>(tree, scene, out).emit(0);
+  Collapser<N>(tree, scene, options, out).emit(0);
   return out;
 }
 
-template WideBvh<4> collapse_bvh<4>(const Bvh2&, const Scene&);
-template WideBvh<8> collapse_bvh<8>(const Bvh2&, const Scene&);
+template WideBvh<4> collapse_bvh<4>(const Bvh2&, const Scene&, const WideCollapseOptions&);
+template WideBvh<8> collapse_bvh<8>(const Bvh2&, const Scene&, const WideCollapseOptions&);
+
+template <int N>
+double wide_sah_cost(const WideBvh<N>& wide, const WideCollapseOptions& options) {
+  const double root_area = wide.root_box.surface_area();
+  if (wide.nodes.empty() || !(root_area > 0)) return 0.0;
+  double cost = options.c_node * root_area;
+  for (const WideBvhNode<N>& node : wide.nodes)
+    for (int i = 0; i < static_cast<int>(node.used); ++i) {
+      const double area = node.box(i).surface_area();
+      cost += WideRef::is_leaf(node.child[i]) ? options.c_packet * area * WideRef::count(node.child[i])
+                                              : options.c_node * area;
+    }
+  return cost / root_area;
+}
+
+template double wide_sah_cost<4>(const WideBvh<4>&, const WideCollapseOptions&);
+template double wide_sah_cost<8>(const WideBvh<8>&, const WideCollapseOptions&);
 
 }  // namespace raylab

@@ -1,9 +1,14 @@
 #pragma once
 /// A wide BVH (4 or 8 children per node) collapsed from the binary one, after Wald, Benthin and
 /// Boulos, "Getting Rid of Packets: Efficient SIMD Single-Ray Traversal using Multi-Branching
-/// BVHs" (RT 2008), and Embree's BVH4/BVH8: each wide node takes a binary node's two children
-/// and repeatedly opens the interior child of largest surface area until it has `N` children
-/// (or only leaves remain), so the SAH-expensive boxes are the ones replaced by their children.
+/// BVHs" (RT 2008), and Embree's BVH4/BVH8. Two collapses (BvhCollapse):
+///  - greedy: each wide node takes a binary node's two children and repeatedly opens the
+///    interior child of largest surface area until it has `N` children (or only leaves remain),
+///    so the SAH-expensive boxes are the ones replaced by their children;
+///  - sah: the collapse of least wide SAH cost (Ylitie, Karras and Laine, "Efficient Incoherent
+///    Ray Traversal on GPUs Through Compressed Wide BVHs", HPG 2017, §3.1), by dynamic
+///    programming over the binary tree: which nodes become wide nodes, how each wide node's `N`
+///    lanes are shared among the subtrees below it, and which small subtrees become one leaf.
 ///
 /// Layout: one 64-byte aligned node holds its children's boxes as SoA float arrays (one
 /// N-wide load per slab bound), the children's references and the number of used lanes. Leaves
@@ -11,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "accel/bvh/bvh_config.h"
 #include "accel/bvh/bvh_node.h"
 #include "accel/bvh/packed_triangles.h"
 #include "scene/scene.h"
@@ -63,14 +69,39 @@ struct WideBvh {
   std::size_t bytes() const { return nodes.size() * sizeof(Node) + packets.size() * sizeof(TrianglePacket); }
 };
 
-/// Collapses `tree` (built over `scene`, which must not be instanced) into an N-wide BVH whose
-/// leaves are the binary leaves, packed. Every binary leaf reference appears in exactly one
-/// packet lane; every wide child box is the binary node's box. Throws std::length_error when a
-/// leaf or the packet array exceeds WideRef's encoding.
-template <int N>
-WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene);
+/// What collapse_bvh builds.
+struct WideCollapseOptions {
+  BvhCollapse method = BvhCollapse::sah;
+  /// The wide SAH (BvhCollapse::sah), per unit of area: a node visit (its N child boxes tested at
+  /// once) and a packet test (kPacketWidth primitives at once). 3:1 traced as fast as 2:1 and 4:1
+  /// and faster than 1:1 and 0.5:1 (bench_bvh, robust and robust=off against Embree, 3
+  /// repetitions, on subdivided:of=cgal:bunny00,levels=2, grass:blades=60000 and
+  /// walls:n=2000,angle=60); a larger c_node merges more leaves (fewer nodes and bytes).
+  double c_node = 3.0;
+  double c_packet = 1.0;
+  /// The most primitives a leaf merged from a binary subtree holds (BvhCollapse::sah); binary
+  /// leaves are kept whole whatever their size.
+  std::uint32_t max_leaf_primitives = 16;
+};
 
-extern template WideBvh<4> collapse_bvh<4>(const Bvh2&, const Scene&);
-extern template WideBvh<8> collapse_bvh<8>(const Bvh2&, const Scene&);
+/// Collapses `tree` (built over `scene`, which must not be instanced) into an N-wide BVH. Each
+/// wide leaf is one binary leaf, or (BvhCollapse::sah) the binary leaves of one subtree merged,
+/// packed; every binary leaf reference appears in exactly one packet lane; every wide child box
+/// is a binary node's box. Throws std::length_error when a leaf or the packet array exceeds
+/// WideRef's encoding.
+template <int N>
+WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options = {});
+
+extern template WideBvh<4> collapse_bvh<4>(const Bvh2&, const Scene&, const WideCollapseOptions&);
+extern template WideBvh<8> collapse_bvh<8>(const Bvh2&, const Scene&, const WideCollapseOptions&);
+
+/// The wide SAH cost of `wide` (full float nodes) under `options`' constants, areas relative to
+/// the root box's: Σ_nodes c_node·SA(node) + Σ_leaves c_packet·SA(leaf)·packets(leaf). The cost
+/// BvhCollapse::sah minimises: no other collapse of the same binary tree costs less.
+template <int N>
+double wide_sah_cost(const WideBvh<N>& wide, const WideCollapseOptions& options);
+
+extern template double wide_sah_cost<4>(const WideBvh<4>&, const WideCollapseOptions&);
+extern template double wide_sah_cost<8>(const WideBvh<8>&, const WideCollapseOptions&);
 
 }  // namespace raylab
