@@ -181,8 +181,8 @@ AccelKind make_bvh_kind() {
            "builder=sweep", "cost=default", "width=2,cost=default", "kernel=watertight", "kernel=watertight,width=4",
            "kernel=watertight,width=2", "optimize=reinsert", "optimize=reinsert,width=2", "nodes=quantized",
            "nodes=quantized,width=4,robust=off", "nodes=quantized,kernel=watertight", "leaves=indexed",
-           "leaves=indexed,nodes=quantized", "leaves=indexed,width=4,robust=off", "leaves=indexed,kernel=watertight", "collapse=greedy",
-           "collapse=greedy,width=4,robust=off"}};
+           "leaves=indexed,nodes=quantized", "leaves=indexed,width=4,robust=off", "leaves=indexed,kernel=watertight",
+           "collapse=greedy", "collapse=greedy,width=4,robust=off"}};
 }
 
 namespace {
