@@ -105,4 +105,10 @@ IndexedLeaves index_packets(const Scene& scene, std::span<const TrianglePacket> 
 /// spheres) to `out`; returns how many were appended.
 std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims, std::vector<TrianglePacket>& out);
 
+/// The packets pack_leaf appends for a leaf of `triangles` triangles and `spheres` spheres: each
+/// kind in whole packets of kPacketWidth.
+inline std::size_t packed_leaf_packets(std::size_t triangles, std::size_t spheres) {
+  return (triangles + kPacketWidth - 1) / kPacketWidth + (spheres + kPacketWidth - 1) / kPacketWidth;
+}
+
 }  // namespace raylab

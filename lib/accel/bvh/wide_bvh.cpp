@@ -77,9 +77,11 @@ class SahCollapse {
         }
     }
     const float interior = static_cast<float>(options_.c_node) * area + split[N];
-    const bool may_be_leaf = e.triangles + e.spheres <= options_.max_leaf_primitives;
-    e.leaf = may_be_leaf && leaf_cost(area, e) < interior;
-    e.cost[0] = e.leaf ? leaf_cost(area, e) : interior;
+    const float as_leaf = e.triangles + e.spheres <= options_.max_leaf_primitives
+                              ? leaf_cost(area, e)
+                              : std::numeric_limits<float>::infinity();
+    e.leaf = as_leaf < interior;
+    e.cost[0] = e.leaf ? as_leaf : interior;
     e.lanes[0] = 1;
     for (int k = 2; k <= N; ++k) {
       const bool split_k = split[k] < e.cost[k - 2];
@@ -89,8 +91,7 @@ class SahCollapse {
   }
 
   float leaf_cost(float area, const Entry& e) const {
-    const std::uint32_t packets = (e.triangles + kPacketWidth - 1) / kPacketWidth + (e.spheres + kPacketWidth - 1) / kPacketWidth;
-    return static_cast<float>(options_.c_packet) * area * static_cast<float>(packets);
+    return static_cast<float>(options_.c_packet) * area * static_cast<float>(packed_leaf_packets(e.triangles, e.spheres));
   }
 
   const Bvh2& tree_;
@@ -232,7 +233,7 @@ WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene, const WideCollapse
     if (!n.is_leaf()) continue;
     std::size_t spheres = 0;
     for (std::uint32_t k = 0; k < n.count; ++k) spheres += scene.is_sphere(tree.prims[n.first + k]);
-    packets += (n.count - spheres + kPacketWidth - 1) / kPacketWidth + (spheres + kPacketWidth - 1) / kPacketWidth;
+    packets += packed_leaf_packets(n.count - spheres, spheres);
   }
   out.nodes.reserve(tree.nodes.size() / 2 + 1);
   out.packets.reserve(packets);
