@@ -148,6 +148,26 @@ TEST(WideBvh, SahCollapseCostsNoMoreThanGreedy) {
   EXPECT_LT(sah_sum, 0.98 * greedy_sum);  // it does find cheaper trees
 }
 
+/// The SAH collapse's cost pass runs its subtrees as parallel tasks on trees this large (more
+/// than 2^16 binary nodes); the wide tree is the same, byte for byte, with one thread or two.
+TEST(WideBvh, SahCollapseIsTheSameWithAnyThreadCount) {
+  const auto scene = make_scene("grass:blades=25000");
+  BvhConfig config;
+  config.max_leaf_size = 1;
+  config.threads = 1;
+  const Bvh2 tree = build_bvh(*scene, config);
+  ASSERT_GT(tree.nodes.size(), std::size_t{1} << 16);
+  WideCollapseOptions options;
+  options.threads = 1;
+  const WideBvh<8> one = collapse_bvh<8>(tree, *scene, options);
+  options.threads = 2;
+  const WideBvh<8> two = collapse_bvh<8>(tree, *scene, options);
+  ASSERT_EQ(one.nodes.size(), two.nodes.size());
+  ASSERT_EQ(one.packets.size(), two.packets.size());
+  EXPECT_EQ(std::memcmp(one.nodes.data(), two.nodes.data(), one.nodes.size() * sizeof(WideBvhNode<8>)), 0);
+  EXPECT_EQ(std::memcmp(one.packets.data(), two.packets.data(), one.packets.size() * sizeof(TrianglePacket)), 0);
+}
+
 /// Boxes and rays built to hit the NaN and boundary cases of the slab test: axis-parallel rays
 /// with +0 and -0 components, origins on faces and in box planes, flat boxes.
 struct BoxCase {

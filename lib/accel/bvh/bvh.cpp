@@ -15,6 +15,7 @@ Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
   WideCollapseOptions collapse;
   collapse.method = config_.collapse;
   collapse.max_leaf_primitives = static_cast<std::uint32_t>(config_.max_leaf_size);
+  collapse.threads = config_.threads;
   if (config_.width == 4 && !quantized) wide4_ = collapse_bvh<4>(tree_, *scene_, collapse);
   if (config_.width == 8 && !quantized) wide8_ = collapse_bvh<8>(tree_, *scene_, collapse);
   if (config_.width == 4 && quantized) quantized4_ = quantize_wide_bvh(collapse_bvh<4>(tree_, *scene_, collapse));

@@ -1,6 +1,10 @@
 #include "accel/bvh/wide_bvh.h"
 
 #include "accel/common/huge_pages.h"
+#include "accel/common/tracer.h"
+
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <limits>
 #include <memory>
@@ -21,83 +25,113 @@ namespace {
 /// where a binary leaf is always a leaf, and an interior node may be one when its subtree holds
 /// at most max_leaf_primitives primitives (packets(n): its triangles and spheres each in whole
 /// packets, as pack_leaf packs them).
+///
+/// The costs flow up the recursion; only each node's decisions are stored for the emission. The
+/// subtrees below the top kParallelDepth levels are solved as parallel tasks when the tree has at
+/// least kParallelMinNodes nodes; a node's decisions depend on its subtree alone, so they are the
+/// same with any thread count.
 template <int N>
 class SahCollapse {
  public:
-  struct Entry {
-    float cost[N];          ///< cost[k - 1] = cost(n, k)
-    std::uint8_t lanes[N];  ///< the lanes cost[k - 1] takes: 1 (n itself), or j >= 2 (split(n, j))
-    std::uint8_t left[N];   ///< left[j - 1], j >= 2: the lanes of split(n, j) given to the left child
-    std::uint32_t triangles, spheres;
-    bool leaf;  ///< in one lane, n is a leaf
+  /// The decisions for binary node n.
+  struct Decision {
+    std::uint8_t lanes[N];  ///< the lanes cost(n, k) takes (index k - 1): 1 (n itself), or j >= 2 (split(n, j))
+    std::uint8_t left[N];   ///< index j - 1, j >= 2: the lanes of split(n, j) given to the left child
+    bool leaf;              ///< in one lane, n is a leaf
   };
+
+  static constexpr int kParallelDepth = 6;
+  static constexpr std::size_t kParallelMinNodes = std::size_t{1} << 16;
 
   SahCollapse(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options)
       : tree_(tree),
         scene_(scene),
         options_(options),
-        entries_(std::make_unique_for_overwrite<Entry[]>(tree.nodes.size())) {
-    // Every entry is written before it is read (fill visits each node once). In 4 KiB pages the
-    // first writes faulted for longer than the whole collapse took (bench_bvh_build, 1.2·10^6
-    // triangles): huge pages.
-    advise_huge_pages(entries_.get(), tree.nodes.size() * sizeof(Entry));
-    fill(0);
+        has_spheres_(!scene.spheres.empty()),
+        decisions_(std::make_unique_for_overwrite<Decision[]>(tree.nodes.size())) {
+    // Every decision is written before it is read (solve visits each node once). Huge pages: in
+    // 4 KiB pages, the first writes to a per-node table fault for as long as the collapse takes
+    // (bench_bvh_build, 1.2·10^6 triangles).
+    advise_huge_pages(decisions_.get(), tree.nodes.size() * sizeof(Decision));
+    const int threads = resolve_thread_count(options.threads);
+    if (threads > 1 && tree.nodes.size() >= kParallelMinNodes) {
+      tbb::task_arena(threads).execute([&] { solve(0, 0); });
+    } else {
+      solve(0, kParallelDepth);
+    }
   }
 
-  const Entry& operator[](std::uint32_t node) const { return entries_[node]; }
+  const Decision& operator[](std::uint32_t node) const { return decisions_[node]; }
 
  private:
-  void fill(std::uint32_t index) {
+  /// cost(n, k) at index k - 1, and the primitives of n's subtree.
+  struct Costs {
+    float cost[N];
+    std::uint32_t triangles, spheres;
+  };
+
+  Costs solve(std::uint32_t index, int depth) {
     const Bvh2Node& node = tree_.nodes[index];
-    Entry& e = entries_[index];
+    Decision& d = decisions_[index];
     const float area = node.box.surface_area();
+    Costs c;
     if (node.is_leaf()) {
-      e.spheres = 0;
-      for (std::uint32_t k = 0; k < node.count; ++k) e.spheres += scene_.is_sphere(tree_.prims[node.first + k]);
-      e.triangles = node.count - e.spheres;
-      e.leaf = true;
-      for (int k = 0; k < N; ++k) e.cost[k] = leaf_cost(area, e), e.lanes[k] = 1, e.left[k] = 0;
-      return;
+      c.spheres = 0;
+      if (has_spheres_)
+        for (std::uint32_t k = 0; k < node.count; ++k) c.spheres += scene_.is_sphere(tree_.prims[node.first + k]);
+      c.triangles = node.count - c.spheres;
+      const float leaf = leaf_cost(area, c);
+      for (int k = 0; k < N; ++k) c.cost[k] = leaf, d.lanes[k] = 1, d.left[k] = 0;
+      d.leaf = true;
+      return c;
     }
-    fill(node.first);
-    fill(node.first + 1);
-    const Entry& l = entries_[node.first];
-    const Entry& r = entries_[node.first + 1];
-    e.triangles = l.triangles + r.triangles;
-    e.spheres = l.spheres + r.spheres;
+    Costs l, r;
+    if (depth < kParallelDepth) {
+      tbb::parallel_invoke([&] { l = solve(node.first, depth + 1); }, [&] { r = solve(node.first + 1, depth + 1); });
+    } else {
+      l = solve(node.first, depth + 1);
+      r = solve(node.first + 1, depth + 1);
+    }
+    c.triangles = l.triangles + r.triangles;
+    c.spheres = l.spheres + r.spheres;
     float split[N + 1];
-    e.left[0] = 0;
+    d.left[0] = 0;
     for (int j = 2; j <= N; ++j) {
-      split[j] = std::numeric_limits<float>::infinity();
-      e.left[j - 1] = 1;
-      for (int i = 1; i < j; ++i)
-        if (const float c = l.cost[i - 1] + r.cost[j - i - 1]; c < split[j]) {
-          split[j] = c;
-          e.left[j - 1] = static_cast<std::uint8_t>(i);
-        }
+      // Selects rather than branches: which i wins is data-dependent and poorly predicted.
+      float best = l.cost[0] + r.cost[j - 2];
+      std::uint8_t best_i = 1;
+      for (int i = 2; i < j; ++i) {
+        const float s = l.cost[i - 1] + r.cost[j - i - 1];
+        best_i = s < best ? static_cast<std::uint8_t>(i) : best_i;
+        best = s < best ? s : best;
+      }
+      split[j] = best;
+      d.left[j - 1] = best_i;
     }
     const float interior = static_cast<float>(options_.c_node) * area + split[N];
-    const float as_leaf = e.triangles + e.spheres <= options_.max_leaf_primitives
-                              ? leaf_cost(area, e)
+    const float as_leaf = c.triangles + c.spheres <= options_.max_leaf_primitives
+                              ? leaf_cost(area, c)
                               : std::numeric_limits<float>::infinity();
-    e.leaf = as_leaf < interior;
-    e.cost[0] = e.leaf ? as_leaf : interior;
-    e.lanes[0] = 1;
+    d.leaf = as_leaf < interior;
+    c.cost[0] = d.leaf ? as_leaf : interior;
+    d.lanes[0] = 1;
     for (int k = 2; k <= N; ++k) {
-      const bool split_k = split[k] < e.cost[k - 2];
-      e.cost[k - 1] = split_k ? split[k] : e.cost[k - 2];
-      e.lanes[k - 1] = split_k ? static_cast<std::uint8_t>(k) : e.lanes[k - 2];
+      const bool split_k = split[k] < c.cost[k - 2];
+      c.cost[k - 1] = split_k ? split[k] : c.cost[k - 2];
+      d.lanes[k - 1] = split_k ? static_cast<std::uint8_t>(k) : d.lanes[k - 2];
     }
+    return c;
   }
 
-  float leaf_cost(float area, const Entry& e) const {
-    return static_cast<float>(options_.c_packet) * area * static_cast<float>(packed_leaf_packets(e.triangles, e.spheres));
+  float leaf_cost(float area, const Costs& c) const {
+    return static_cast<float>(options_.c_packet) * area * static_cast<float>(packed_leaf_packets(c.triangles, c.spheres));
   }
 
   const Bvh2& tree_;
   const Scene& scene_;
   const WideCollapseOptions& options_;
-  std::unique_ptr<Entry[]> entries_;
+  const bool has_spheres_;
+  std::unique_ptr<Decision[]> decisions_;
 };
 
 template <int N>
@@ -229,10 +263,12 @@ WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene, const WideCollapse
   // (at most one node for a binary leaf at the root); the packets are at most those of the
   // binary leaves packed one by one (a merged leaf may fill its packets better).
   std::size_t packets = 0;
+  const bool has_spheres = !scene.spheres.empty();
   for (const Bvh2Node& n : tree.nodes) {
     if (!n.is_leaf()) continue;
     std::size_t spheres = 0;
-    for (std::uint32_t k = 0; k < n.count; ++k) spheres += scene.is_sphere(tree.prims[n.first + k]);
+    if (has_spheres)
+      for (std::uint32_t k = 0; k < n.count; ++k) spheres += scene.is_sphere(tree.prims[n.first + k]);
     packets += packed_leaf_packets(n.count - spheres, spheres);
   }
   out.nodes.reserve(tree.nodes.size() / 2 + 1);

@@ -83,6 +83,9 @@ struct WideCollapseOptions {
   /// The most primitives a leaf merged from a binary subtree holds (BvhCollapse::sah); binary
   /// leaves are kept whole whatever their size.
   std::uint32_t max_leaf_primitives = 16;
+  /// Threads of the SAH collapse's cost pass (BvhConfig::threads: 0 means every hardware thread);
+  /// the tree does not depend on them.
+  int threads = 0;
 };
 
 /// Collapses `tree` (built over `scene`, which must not be instanced) into an N-wide BVH. Each
