@@ -21,10 +21,10 @@ Bvh::Bvh(std::shared_ptr<const Scene> scene, const BvhConfig& config)
   if (config_.width == 4 && quantized) quantized4_ = quantize_wide_bvh(collapse_bvh<4>(tree_, *scene_, collapse));
   if (config_.width == 8 && quantized) quantized8_ = quantize_wide_bvh(collapse_bvh<8>(tree_, *scene_, collapse));
   if (config_.width != 2 && config_.leaves == BvhLeaves::indexed) {
-    std::vector<TrianglePacket>& packets = config_.width == 4 ? (quantized ? quantized4_.packets : wide4_.packets)
-                                                              : (quantized ? quantized8_.packets : wide8_.packets);
+    BuildArray<TrianglePacket>& packets = config_.width == 4 ? (quantized ? quantized4_.packets : wide4_.packets)
+                                                             : (quantized ? quantized8_.packets : wide8_.packets);
     indexed_ = index_packets(*scene_, packets);
-    std::vector<TrianglePacket>().swap(packets);
+    BuildArray<TrianglePacket>().swap(packets);
   }
 }
 

@@ -15,17 +15,17 @@ TrianglePacket empty_packet() {
 
 }  // namespace
 
-std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims, std::vector<TrianglePacket>& out) {
-  const std::size_t before = out.size();
+std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims, TrianglePacket* out) {
+  TrianglePacket* next = out;
   for (const bool spheres : {false, true}) {
     int lane = kPacketWidth;
     for (const std::uint32_t prim : prims) {
       if (scene.is_sphere(prim) != spheres) continue;
       if (lane == kPacketWidth) {
-        out.push_back(empty_packet());
+        *next++ = empty_packet();
         lane = 0;
       }
-      TrianglePacket& p = out.back();
+      TrianglePacket& p = next[-1];
       p.prim[lane] = prim;
       if (!spheres) {
         const auto& tri = scene.mesh.triangles[prim];
@@ -37,7 +37,15 @@ std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims
       ++lane;
     }
   }
-  return static_cast<std::uint32_t>(out.size() - before);
+  return static_cast<std::uint32_t>(next - out);
+}
+
+std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims, std::vector<TrianglePacket>& out) {
+  std::size_t spheres = 0;
+  for (const std::uint32_t prim : prims) spheres += scene.is_sphere(prim);
+  const std::size_t before = out.size();
+  out.resize(before + packed_leaf_packets(prims.size() - spheres, spheres));
+  return pack_leaf(scene, prims, out.data() + before);
 }
 
 IndexedLeaves index_packets(const Scene& scene, std::span<const TrianglePacket> packets) {

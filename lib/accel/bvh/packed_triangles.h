@@ -101,8 +101,11 @@ IndexedLeaves index_packets(const Scene& scene, std::span<const TrianglePacket> 
   }
 }
 
-/// Appends the packets of one leaf holding `prims` (triangles first, in their order, then
-/// spheres) to `out`; returns how many were appended.
+/// Writes the packets of one leaf holding `prims` (triangles first, in their order, then
+/// spheres) from `out` on: packed_leaf_packets(triangles, spheres) of them, the count returned.
+std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims, TrianglePacket* out);
+
+/// The same packets, appended to `out`; returns how many were appended.
 std::uint32_t pack_leaf(const Scene& scene, std::span<const std::uint32_t> prims, std::vector<TrianglePacket>& out);
 
 /// The packets pack_leaf appends for a leaf of `triangles` triangles and `spheres` spheres: each

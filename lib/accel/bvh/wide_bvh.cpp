@@ -3,6 +3,7 @@
 #include "accel/common/huge_pages.h"
 #include "accel/common/tracer.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
@@ -16,6 +17,21 @@ namespace raylab {
 
 namespace {
 
+/// Trees of at least this many binary nodes are collapsed by parallel tasks (when more than one
+/// thread is allowed): the SAH cost pass solves the subtrees below its top kSahParallelDepth
+/// levels as tasks, and the emission writes the subtrees below its top kEmitParallelDepth wide
+/// levels as tasks. Each task's output depends on its subtree alone, and every subtree is written
+/// at offsets fixed before it is emitted, so the wide tree is the same with any thread count.
+constexpr std::size_t kParallelMinNodes = std::size_t{1} << 16;
+constexpr int kSahParallelDepth = 6;
+constexpr int kEmitParallelDepth = 2;
+
+/// The wide nodes and packets of the subtree that replaces a binary node.
+struct WideSize {
+  std::uint32_t nodes = 0, packets = 0;
+  WideSize operator+(const WideSize& o) const { return {nodes + o.nodes, packets + o.packets}; }
+};
+
 /// The wide SAH over the collapses of a binary tree (Ylitie, Karras and Laine 2017, §3.1). For a
 /// binary node n of box area A(n) and k in [1, N], cost(n, k) is the least SAH cost of n's
 /// subtree placed in at most k lanes of one wide node:
@@ -26,10 +42,8 @@ namespace {
 /// at most max_leaf_primitives primitives (packets(n): its triangles and spheres each in whole
 /// packets, as pack_leaf packs them).
 ///
-/// The costs flow up the recursion; only each node's decisions are stored for the emission. The
-/// subtrees below the top kParallelDepth levels are solved as parallel tasks when the tree has at
-/// least kParallelMinNodes nodes; a node's decisions depend on its subtree alone, so they are the
-/// same with any thread count.
+/// The costs flow up the recursion; each node stores only its decisions and the size of the wide
+/// subtree that replaces it, for the emission.
 template <int N>
 class SahCollapse {
  public:
@@ -38,12 +52,10 @@ class SahCollapse {
     std::uint8_t lanes[N];  ///< the lanes cost(n, k) takes (index k - 1): 1 (n itself), or j >= 2 (split(n, j))
     std::uint8_t left[N];   ///< index j - 1, j >= 2: the lanes of split(n, j) given to the left child
     bool leaf;              ///< in one lane, n is a leaf
+    WideSize wide;          ///< the wide subtree that replaces n (a binary leaf: one node holding it)
   };
 
-  static constexpr int kParallelDepth = 6;
-  static constexpr std::size_t kParallelMinNodes = std::size_t{1} << 16;
-
-  SahCollapse(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options)
+  SahCollapse(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options, bool parallel)
       : tree_(tree),
         scene_(scene),
         options_(options),
@@ -53,20 +65,16 @@ class SahCollapse {
     // 4 KiB pages, the first writes to a per-node table fault for as long as the collapse takes
     // (bench_bvh_build, 1.2·10^6 triangles).
     advise_huge_pages(decisions_.get(), tree.nodes.size() * sizeof(Decision));
-    const int threads = resolve_thread_count(options.threads);
-    if (threads > 1 && tree.nodes.size() >= kParallelMinNodes) {
-      tbb::task_arena(threads).execute([&] { solve(0, 0); });
-    } else {
-      solve(0, kParallelDepth);
-    }
+    solve(0, parallel ? 0 : kSahParallelDepth);
   }
 
   const Decision& operator[](std::uint32_t node) const { return decisions_[node]; }
 
  private:
-  /// cost(n, k) at index k - 1, and the primitives of n's subtree.
+  /// Index k - 1: cost(n, k), and the size of the lanes it takes (n as a leaf: its packets).
   struct Costs {
     float cost[N];
+    WideSize size[N];
     std::uint32_t triangles, spheres;
   };
 
@@ -81,12 +89,14 @@ class SahCollapse {
         for (std::uint32_t k = 0; k < node.count; ++k) c.spheres += scene_.is_sphere(tree_.prims[node.first + k]);
       c.triangles = node.count - c.spheres;
       const float leaf = leaf_cost(area, c);
-      for (int k = 0; k < N; ++k) c.cost[k] = leaf, d.lanes[k] = 1, d.left[k] = 0;
+      const WideSize packets{0, leaf_packets(c)};
+      for (int k = 0; k < N; ++k) c.cost[k] = leaf, c.size[k] = packets, d.lanes[k] = 1, d.left[k] = 0;
       d.leaf = true;
+      d.wide = {1, packets.packets};
       return c;
     }
     Costs l, r;
-    if (depth < kParallelDepth) {
+    if (depth < kSahParallelDepth) {
       tbb::parallel_invoke([&] { l = solve(node.first, depth + 1); }, [&] { r = solve(node.first + 1, depth + 1); });
     } else {
       l = solve(node.first, depth + 1);
@@ -108,23 +118,31 @@ class SahCollapse {
       split[j] = best;
       d.left[j - 1] = best_i;
     }
+    const auto split_size = [&](int j) { return l.size[d.left[j - 1] - 1] + r.size[j - d.left[j - 1] - 1]; };
     const float interior = static_cast<float>(options_.c_node) * area + split[N];
     const float as_leaf = c.triangles + c.spheres <= options_.max_leaf_primitives
                               ? leaf_cost(area, c)
                               : std::numeric_limits<float>::infinity();
     d.leaf = as_leaf < interior;
+    d.wide = WideSize{1, 0} + split_size(N);
     c.cost[0] = d.leaf ? as_leaf : interior;
+    c.size[0] = d.leaf ? WideSize{0, leaf_packets(c)} : d.wide;
     d.lanes[0] = 1;
     for (int k = 2; k <= N; ++k) {
       const bool split_k = split[k] < c.cost[k - 2];
       c.cost[k - 1] = split_k ? split[k] : c.cost[k - 2];
       d.lanes[k - 1] = split_k ? static_cast<std::uint8_t>(k) : d.lanes[k - 2];
+      c.size[k - 1] = split_k ? split_size(k) : c.size[k - 2];
     }
     return c;
   }
 
+  static std::uint32_t leaf_packets(const Costs& c) {
+    return static_cast<std::uint32_t>(packed_leaf_packets(c.triangles, c.spheres));
+  }
+
   float leaf_cost(float area, const Costs& c) const {
-    return static_cast<float>(options_.c_packet) * area * static_cast<float>(packed_leaf_packets(c.triangles, c.spheres));
+    return static_cast<float>(options_.c_packet) * area * static_cast<float>(leaf_packets(c));
   }
 
   const Bvh2& tree_;
@@ -134,44 +152,32 @@ class SahCollapse {
   std::unique_ptr<Decision[]> decisions_;
 };
 
+/// Writes the wide tree of a collapse into arrays sized for it: each wide node, then its
+/// children's subtrees in lane order, depth first (a child's whole subtree before the next
+/// child's; its packets likewise).
 template <int N>
 class Collapser {
  public:
-  Collapser(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options, WideBvh<N>& out)
-      : tree_(tree), scene_(scene), out_(out) {
-    if (options.method == BvhCollapse::sah) sah_.emplace(tree, scene, options);
+  Collapser(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options, bool parallel)
+      : tree_(tree), scene_(scene), has_spheres_(!scene.spheres.empty()), parallel_(parallel) {
+    if (options.method == BvhCollapse::sah) {
+      sah_.emplace(tree, scene, options, parallel);
+    } else {
+      greedy_sizes_ = std::make_unique_for_overwrite<WideSize[]>(tree.nodes.size());
+      greedy_size(0);
+    }
   }
 
-  /// Emits the wide node replacing binary node `index` and returns its index in out_.nodes.
-  /// A binary leaf at the root becomes a wide node with one leaf child.
-  std::uint32_t emit(std::uint32_t index) {
-    const std::uint32_t self = static_cast<std::uint32_t>(out_.nodes.size());
-    out_.nodes.emplace_back();
-    Child kids[N];
-    int n = 0;
-    const Bvh2Node& node = tree_.nodes[index];
-    if (node.is_leaf()) {
-      kids[n++] = {index, true};
-    } else if (sah_) {
-      const int left = (*sah_)[index].left[N - 1];
-      place(node.first, left, kids, n);
-      place(node.first + 1, N - left, kids, n);
-    } else {
-      n = greedy_children(node, kids);
-    }
-    std::uint32_t refs[N];
-    for (int i = 0; i < n; ++i) refs[i] = kids[i].leaf ? leaf(kids[i].node) : emit(kids[i].node);
-    WideBvhNode<N>& w = out_.nodes[self];
-    for (int i = 0; i < N; ++i) {
-      const Bounds3f b = i < n ? tree_.nodes[kids[i].node].box : Bounds3f{};
-      for (int a = 0; a < 3; ++a) {
-        w.bounds[a][i] = b.lo[a];
-        w.bounds[3 + a][i] = b.hi[a];
-      }
-      w.child[i] = i < n ? refs[i] : 0u;
-    }
-    w.used = static_cast<std::uint32_t>(n);
-    return self;
+  void emit_tree(WideBvh<N>& out) {
+    const WideSize total = wide_size(0);
+    if (total.packets > WideRef::kFirstMask + 1)
+      throw std::length_error("wide BVH: packet array too large for the reference encoding");
+    out.nodes.resize(total.nodes);
+    out.packets.resize(total.packets);
+    out.root_box = tree_.nodes[0].box;
+    out_ = &out;
+    std::vector<std::uint32_t> merged;
+    emit(0, 0, 0, parallel_ ? 0 : kEmitParallelDepth, merged);
   }
 
  private:
@@ -181,6 +187,66 @@ class Collapser {
     std::uint32_t node;
     bool leaf;
   };
+
+  WideSize wide_size(std::uint32_t index) const { return sah_ ? (*sah_)[index].wide : greedy_sizes_[index]; }
+
+  /// The lanes of the wide node replacing binary node `index`; a binary leaf (at the root) is
+  /// its only lane.
+  int children(std::uint32_t index, Child (&kids)[N]) const {
+    const Bvh2Node& node = tree_.nodes[index];
+    if (node.is_leaf()) {
+      kids[0] = {index, true};
+      return 1;
+    }
+    if (!sah_) return greedy_children(node, kids);
+    int n = 0;
+    const int left = (*sah_)[index].left[N - 1];
+    place(node.first, left, kids, n);
+    place(node.first + 1, N - left, kids, n);
+    return n;
+  }
+
+  /// Writes the wide node replacing binary node `index` at node `slot`, and its subtree's other
+  /// nodes from slot + 1 and its packets from `first_packet`; `merged` holds a merged leaf's
+  /// references while it is packed.
+  void emit(std::uint32_t index, std::uint32_t slot, std::uint32_t first_packet, int depth,
+            std::vector<std::uint32_t>& merged) {
+    Child kids[N];
+    const int n = children(index, kids);
+    std::uint32_t refs[N], packets[N];
+    std::uint32_t next_slot = slot + 1, next_packet = first_packet;
+    for (int i = 0; i < n; ++i) {
+      packets[i] = next_packet;
+      if (kids[i].leaf) {
+        refs[i] = leaf(kids[i].node, next_packet, merged);
+        next_packet += WideRef::count(refs[i]);
+      } else {
+        const WideSize size = wide_size(kids[i].node);
+        refs[i] = next_slot;
+        next_slot += size.nodes;
+        next_packet += size.packets;
+      }
+    }
+    WideBvhNode<N>& w = out_->nodes[slot];
+    for (int i = 0; i < N; ++i) {
+      const Bounds3f b = i < n ? tree_.nodes[kids[i].node].box : Bounds3f{};
+      for (int a = 0; a < 3; ++a) {
+        w.bounds[a][i] = b.lo[a];
+        w.bounds[3 + a][i] = b.hi[a];
+      }
+      w.child[i] = i < n ? refs[i] : 0u;
+    }
+    w.used = static_cast<std::uint32_t>(n);
+    if (depth < kEmitParallelDepth) {
+      tbb::parallel_for(0, n, [&](int i) {
+        std::vector<std::uint32_t> own;
+        if (!kids[i].leaf) emit(kids[i].node, refs[i], packets[i], depth + 1, own);
+      });
+      return;
+    }
+    for (int i = 0; i < n; ++i)
+      if (!kids[i].leaf) emit(kids[i].node, refs[i], packets[i], depth + 1, merged);
+  }
 
   /// The binary node's two children, then the interior child of largest area opened, repeatedly.
   int greedy_children(const Bvh2Node& node, Child (&kids)[N]) const {
@@ -206,6 +272,25 @@ class Collapser {
     return n;
   }
 
+  /// Sets greedy_sizes_ for binary node `index` and the nodes below it that the greedy
+  /// collapse turns into wide nodes; returns its size.
+  WideSize greedy_size(std::uint32_t index) {
+    Child kids[N];
+    const int n = children(index, kids);
+    WideSize size{1, 0};
+    for (int i = 0; i < n; ++i) size = size + (kids[i].leaf ? WideSize{0, binary_leaf_packets(kids[i].node)} : greedy_size(kids[i].node));
+    return greedy_sizes_[index] = size;
+  }
+
+  /// The packets pack_leaf makes for binary leaf `index`.
+  std::uint32_t binary_leaf_packets(std::uint32_t index) const {
+    const Bvh2Node& c = tree_.nodes[index];
+    std::uint32_t spheres = 0;
+    if (has_spheres_)
+      for (std::uint32_t k = 0; k < c.count; ++k) spheres += scene_.is_sphere(tree_.prims[c.first + k]);
+    return static_cast<std::uint32_t>(packed_leaf_packets(c.count - spheres, spheres));
+  }
+
   /// Appends the lanes the SAH collapse gives binary node `index` within at most `lanes` lanes.
   void place(std::uint32_t index, int lanes, Child (&kids)[N], int& n) const {
     const auto& e = (*sah_)[index];
@@ -219,37 +304,38 @@ class Collapser {
     place(tree_.nodes[index].first + 1, used - left, kids, n);
   }
 
-  /// Packs the references of binary node `index`'s subtree into one leaf.
-  std::uint32_t leaf(std::uint32_t index) {
+  /// Packs the references of binary node `index`'s subtree into one leaf from packet `first`.
+  std::uint32_t leaf(std::uint32_t index, std::uint32_t first, std::vector<std::uint32_t>& merged) const {
     const Bvh2Node& c = tree_.nodes[index];
     std::span<const std::uint32_t> prims(tree_.prims.data() + c.first, c.count);
     if (!c.is_leaf()) {
-      merged_.clear();
-      gather(index);
-      prims = merged_;
+      merged.clear();
+      gather(index, merged);
+      prims = merged;
     }
-    const std::size_t first = out_.packets.size();
-    const std::uint32_t count = pack_leaf(scene_, prims, out_.packets);
-    if (count > WideRef::kMaxLeafPackets || first + count > WideRef::kFirstMask + 1)
-      throw std::length_error("wide BVH: leaf or packet array too large for the reference encoding");
-    return WideRef::leaf(static_cast<std::uint32_t>(first), count);
+    const std::uint32_t count = pack_leaf(scene_, prims, out_->packets.data() + first);
+    if (count > WideRef::kMaxLeafPackets)
+      throw std::length_error("wide BVH: leaf too large for the reference encoding");
+    return WideRef::leaf(first, count);
   }
 
-  void gather(std::uint32_t index) {
+  void gather(std::uint32_t index, std::vector<std::uint32_t>& merged) const {
     const Bvh2Node& c = tree_.nodes[index];
     if (c.is_leaf()) {
-      merged_.insert(merged_.end(), tree_.prims.begin() + c.first, tree_.prims.begin() + c.first + c.count);
+      merged.insert(merged.end(), tree_.prims.begin() + c.first, tree_.prims.begin() + c.first + c.count);
       return;
     }
-    gather(c.first);
-    gather(c.first + 1);
+    gather(c.first, merged);
+    gather(c.first + 1, merged);
   }
 
   const Bvh2& tree_;
   const Scene& scene_;
-  WideBvh<N>& out_;
+  const bool has_spheres_;
+  const bool parallel_;
   std::optional<SahCollapse<N>> sah_;
-  std::vector<std::uint32_t> merged_;  ///< a merged leaf's references
+  std::unique_ptr<WideSize[]> greedy_sizes_;  ///< BvhCollapse::greedy: the sizes of the nodes it turns into wide nodes
+  WideBvh<N>* out_ = nullptr;
 };
 
 }  // namespace
@@ -258,25 +344,11 @@ template <int N>
 WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options) {
   WideBvh<N> out;
   if (tree.nodes.empty()) return out;
-  // Reserved once and never shrunk: a shrink copies the whole array into freshly faulted pages,
-  // which measured ~5% of the build. Each wide node replaces at least one binary interior node
-  // (at most one node for a binary leaf at the root); the packets are at most those of the
-  // binary leaves packed one by one (a merged leaf may fill its packets better).
-  std::size_t packets = 0;
-  const bool has_spheres = !scene.spheres.empty();
-  for (const Bvh2Node& n : tree.nodes) {
-    if (!n.is_leaf()) continue;
-    std::size_t spheres = 0;
-    if (has_spheres)
-      for (std::uint32_t k = 0; k < n.count; ++k) spheres += scene.is_sphere(tree.prims[n.first + k]);
-    packets += packed_leaf_packets(n.count - spheres, spheres);
-  }
-  out.nodes.reserve(tree.nodes.size() / 2 + 1);
-  out.packets.reserve(packets);
-  advise_huge_pages(out.nodes.data(), out.nodes.capacity() * sizeof(WideBvhNode<N>));
-  advise_huge_pages(out.packets.data(), out.packets.capacity() * sizeof(TrianglePacket));
-  out.root_box = tree.nodes[0].box;
-  Collapser<N>(tree, scene, options, out).emit(0);
+  const int threads = resolve_thread_count(options.threads);
+  const bool parallel = threads > 1 && tree.nodes.size() >= kParallelMinNodes;
+  const auto collapse = [&] { Collapser<N>(tree, scene, options, parallel).emit_tree(out); };
+  if (parallel) tbb::task_arena(threads).execute(collapse);
+  else collapse();
   return out;
 }
 

@@ -19,6 +19,7 @@
 #include "accel/bvh/bvh_config.h"
 #include "accel/bvh/bvh_node.h"
 #include "accel/bvh/packed_triangles.h"
+#include "accel/common/build_array_allocator.h"
 #include "scene/scene.h"
 
 namespace raylab {
@@ -62,8 +63,8 @@ static_assert(sizeof(WideBvhNode<8>) == 256);
 /// Nodes of type `Node`: WideBvhNode<N>, or QuantizedWideBvhNode<N> (quantized_wide_node.h).
 template <int N, class Node = WideBvhNode<N>>
 struct WideBvh {
-  std::vector<Node> nodes;  ///< node 0 is the root (always interior, >= 1 child)
-  std::vector<TrianglePacket> packets;
+  BuildArray<Node> nodes;  ///< node 0 is the root (always interior, >= 1 child)
+  BuildArray<TrianglePacket> packets;
   Bounds3f root_box;
 
   std::size_t bytes() const { return nodes.size() * sizeof(Node) + packets.size() * sizeof(TrianglePacket); }
@@ -83,8 +84,8 @@ struct WideCollapseOptions {
   /// The most primitives a leaf merged from a binary subtree holds (BvhCollapse::sah); binary
   /// leaves are kept whole whatever their size.
   std::uint32_t max_leaf_primitives = 16;
-  /// Threads of the SAH collapse's cost pass (BvhConfig::threads: 0 means every hardware thread);
-  /// the tree does not depend on them.
+  /// Threads of the collapse (BvhConfig::threads: 0 means every hardware thread); the tree does
+  /// not depend on them.
   int threads = 0;
 };
 
