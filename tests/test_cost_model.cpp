@@ -683,6 +683,24 @@ TEST(CostModelFile, BuildersTakeTheFittedConstants) {
     const auto a = make_accelerator(spec + path, scene, context);
     EXPECT_GT(a->stats().nodes, 0u) << spec;
   }
+  // A wide BVH takes its family's constants (per wide node visit, per primitive test) in the SAH
+  // collapse: the binary tree is the default one, and 1:20 (a packet test 80 node visits)
+  // collapses it into more wide nodes than the default 3:1. With collapse=greedy, which has no
+  // costs, the binary SAH takes them.
+  const auto wide_fitted = make_accelerator("bvh:width=8,cost=" + path, scene, context);
+  const auto wide_default = make_accelerator("bvh:width=8", scene);
+  const Bvh& fitted_bvh = dynamic_cast<const Bvh&>(*wide_fitted);
+  const Bvh& default_bvh = dynamic_cast<const Bvh&>(*wide_default);
+  EXPECT_EQ(fitted_bvh.config().wide_cost.c_node, load_builder_costs(path, "bvh8").c_trav);
+  EXPECT_EQ(fitted_bvh.config().wide_cost.c_packet, kPacketWidth * load_builder_costs(path, "bvh8").c_isect);
+  ASSERT_EQ(fitted_bvh.tree().nodes.size(), default_bvh.tree().nodes.size());
+  EXPECT_EQ(fitted_bvh.tree().prims, default_bvh.tree().prims);
+  EXPECT_GT(fitted_bvh.wide8().nodes.size(), default_bvh.wide8().nodes.size());
+  const FittedSahCost c8 = load_builder_costs(path, "bvh8");
+  std::snprintf(manual, sizeof manual, "bvh:width=8,collapse=greedy,c_trav=%.17g,c_isect=%.17g", c8.c_trav, c8.c_isect);
+  EXPECT_EQ(make_accelerator("bvh:width=8,collapse=greedy,cost=" + path, scene, context)->structure_hash(),
+            make_accelerator(manual, scene)->structure_hash())
+      << manual;
   EXPECT_THROW(make_accelerator("kdtree:cost=" + path + ",c_trav=2", scene, context), InputError);
   EXPECT_THROW(make_accelerator("nested-grid:cost=" + path, scene, context), InputError);   // no such parameter
   EXPECT_THROW(make_accelerator("bvh:width=2,cost=" + path, scene, context), InputError);   // no bvh (width 2) entry

@@ -105,7 +105,7 @@ TEST(WideBvh, CollapsePreservesReferencesAndNestsBoxes) {
 template <int N>
 void check_sah_collapse(const Scene& scene, const Bvh2& tree, double c_node, double& greedy_sum, double& sah_sum) {
   WideCollapseOptions options;
-  options.c_node = c_node;
+  options.cost.c_node = c_node;
   options.max_leaf_primitives = 16;
   options.method = BvhCollapse::greedy;
   const double greedy = wide_sah_cost(collapse_bvh<N>(tree, scene, options), options);

@@ -119,7 +119,7 @@ class SahCollapse {
       d.left[j - 1] = best_i;
     }
     const auto split_size = [&](int j) { return l.size[d.left[j - 1] - 1] + r.size[j - d.left[j - 1] - 1]; };
-    const float interior = static_cast<float>(options_.c_node) * area + split[N];
+    const float interior = static_cast<float>(options_.cost.c_node) * area + split[N];
     const float as_leaf = c.triangles + c.spheres <= options_.max_leaf_primitives
                               ? leaf_cost(area, c)
                               : std::numeric_limits<float>::infinity();
@@ -142,7 +142,7 @@ class SahCollapse {
   }
 
   float leaf_cost(float area, const Costs& c) const {
-    return static_cast<float>(options_.c_packet) * area * static_cast<float>(leaf_packets(c));
+    return static_cast<float>(options_.cost.c_packet) * area * static_cast<float>(leaf_packets(c));
   }
 
   const Bvh2& tree_;
@@ -359,12 +359,12 @@ template <int N>
 double wide_sah_cost(const WideBvh<N>& wide, const WideCollapseOptions& options) {
   const double root_area = wide.root_box.surface_area();
   if (wide.nodes.empty() || !(root_area > 0)) return 0.0;
-  double cost = options.c_node * root_area;
+  double cost = options.cost.c_node * root_area;
   for (const WideBvhNode<N>& node : wide.nodes)
     for (int i = 0; i < static_cast<int>(node.used); ++i) {
       const double area = node.box(i).surface_area();
-      cost += WideRef::is_leaf(node.child[i]) ? options.c_packet * area * WideRef::count(node.child[i])
-                                              : options.c_node * area;
+      cost += WideRef::is_leaf(node.child[i]) ? options.cost.c_packet * area * WideRef::count(node.child[i])
+                                              : options.cost.c_node * area;
     }
   return cost / root_area;
 }

@@ -73,14 +73,8 @@ struct WideBvh {
 /// What collapse_bvh builds.
 struct WideCollapseOptions {
   BvhCollapse method = BvhCollapse::sah;
-  /// The wide SAH (BvhCollapse::sah), per unit of area: a node visit (its N child boxes tested at
-  /// once) and a packet test (kPacketWidth primitives at once). bench_bvh against Embree, robust
-  /// and robust=off, 3 repetitions each: 3:1 traced as fast as 2:1 and 4:1 (the bunny refined to
-  /// 1.2·10^6 triangles, walls:n=2000,angle=60), 2:1 faster than 1:1 and 0.5:1 (that bunny,
-  /// grass:blades=60000); differences under ~5% are within the noise. A larger c_node merges more
-  /// leaves: fewer nodes and bytes, more tests.
-  double c_node = 3.0;
-  double c_packet = 1.0;
+  /// The wide SAH BvhCollapse::sah minimises.
+  WideSahCost cost;
   /// The most primitives a leaf merged from a binary subtree holds (BvhCollapse::sah); binary
   /// leaves are kept whole whatever their size.
   std::uint32_t max_leaf_primitives = 16;
@@ -100,7 +94,7 @@ WideBvh<N> collapse_bvh(const Bvh2& tree, const Scene& scene, const WideCollapse
 extern template WideBvh<4> collapse_bvh<4>(const Bvh2&, const Scene&, const WideCollapseOptions&);
 extern template WideBvh<8> collapse_bvh<8>(const Bvh2&, const Scene&, const WideCollapseOptions&);
 
-/// The wide SAH cost of `wide` (full float nodes) under `options`' constants, areas relative to
+/// The wide SAH cost of `wide` (full float nodes) under `options.cost`, areas relative to
 /// the root box's: Σ_nodes c_node·SA(node) + Σ_leaves c_packet·SA(leaf)·packets(leaf). The cost
 /// BvhCollapse::sah minimises: no other collapse of the same binary tree costs less.
 template <int N>
