@@ -168,6 +168,7 @@ class Collapser {
     }
   }
 
+  /// Sizes `out`'s arrays and writes the whole wide tree into them, its root at node 0.
   void emit_tree(WideBvh<N>& out) {
     const WideSize total = wide_size(0);
     if (total.packets > WideRef::kFirstMask + 1)
@@ -278,7 +279,8 @@ class Collapser {
     Child kids[N];
     const int n = children(index, kids);
     WideSize size{1, 0};
-    for (int i = 0; i < n; ++i) size = size + (kids[i].leaf ? WideSize{0, binary_leaf_packets(kids[i].node)} : greedy_size(kids[i].node));
+    for (int i = 0; i < n; ++i)
+      size = size + (kids[i].leaf ? WideSize{0, binary_leaf_packets(kids[i].node)} : greedy_size(kids[i].node));
     return greedy_sizes_[index] = size;
   }
 
