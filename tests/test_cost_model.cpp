@@ -691,12 +691,12 @@ TEST(CostModelFile, BuildersTakeTheFittedConstants) {
   const auto wide_default = make_accelerator("bvh:width=8", scene);
   const Bvh& fitted_bvh = dynamic_cast<const Bvh&>(*wide_fitted);
   const Bvh& default_bvh = dynamic_cast<const Bvh&>(*wide_default);
-  EXPECT_EQ(fitted_bvh.config().wide_cost.c_node, load_builder_costs(path, "bvh8").c_trav);
-  EXPECT_EQ(fitted_bvh.config().wide_cost.c_packet, kPacketWidth * load_builder_costs(path, "bvh8").c_isect);
+  const FittedSahCost c8 = load_builder_costs(path, "bvh8");
+  EXPECT_EQ(fitted_bvh.config().wide_cost.c_node, c8.c_trav);
+  EXPECT_EQ(fitted_bvh.config().wide_cost.c_packet, kPacketWidth * c8.c_isect);
   ASSERT_EQ(fitted_bvh.tree().nodes.size(), default_bvh.tree().nodes.size());
   EXPECT_EQ(fitted_bvh.tree().prims, default_bvh.tree().prims);
   EXPECT_GT(fitted_bvh.wide8().nodes.size(), default_bvh.wide8().nodes.size());
-  const FittedSahCost c8 = load_builder_costs(path, "bvh8");
   std::snprintf(manual, sizeof manual, "bvh:width=8,collapse=greedy,c_trav=%.17g,c_isect=%.17g", c8.c_trav, c8.c_isect);
   EXPECT_EQ(make_accelerator("bvh:width=8,collapse=greedy,cost=" + path, scene, context)->structure_hash(),
             make_accelerator(manual, scene)->structure_hash())

@@ -32,6 +32,14 @@ struct WideSize {
   WideSize operator+(const WideSize& o) const { return {nodes + o.nodes, packets + o.packets}; }
 };
 
+/// The spheres among binary leaf `leaf`'s primitives; 0 without a look in a scene that has none.
+std::uint32_t leaf_spheres(const Bvh2& tree, const Scene& scene, const Bvh2Node& leaf) {
+  std::uint32_t spheres = 0;
+  if (!scene.spheres.empty())
+    for (std::uint32_t k = 0; k < leaf.count; ++k) spheres += scene.is_sphere(tree.prims[leaf.first + k]);
+  return spheres;
+}
+
 /// The wide SAH over the collapses of a binary tree (Ylitie, Karras and Laine 2017, §3.1). For a
 /// binary node n of box area A(n) and k in [1, N], cost(n, k) is the least SAH cost of n's
 /// subtree placed in at most k lanes of one wide node:
@@ -59,7 +67,6 @@ class SahCollapse {
       : tree_(tree),
         scene_(scene),
         options_(options),
-        has_spheres_(!scene.spheres.empty()),
         decisions_(std::make_unique_for_overwrite<Decision[]>(tree.nodes.size())) {
     // Every decision is written before it is read (solve visits each node once). Huge pages: in
     // 4 KiB pages, the first writes to a per-node table fault for as long as the collapse takes
@@ -84,9 +91,7 @@ class SahCollapse {
     const float area = node.box.surface_area();
     Costs c;
     if (node.is_leaf()) {
-      c.spheres = 0;
-      if (has_spheres_)
-        for (std::uint32_t k = 0; k < node.count; ++k) c.spheres += scene_.is_sphere(tree_.prims[node.first + k]);
+      c.spheres = leaf_spheres(tree_, scene_, node);
       c.triangles = node.count - c.spheres;
       const float leaf = leaf_cost(area, c);
       const WideSize packets{0, leaf_packets(c)};
@@ -148,7 +153,6 @@ class SahCollapse {
   const Bvh2& tree_;
   const Scene& scene_;
   const WideCollapseOptions& options_;
-  const bool has_spheres_;
   std::unique_ptr<Decision[]> decisions_;
 };
 
@@ -159,7 +163,7 @@ template <int N>
 class Collapser {
  public:
   Collapser(const Bvh2& tree, const Scene& scene, const WideCollapseOptions& options, bool parallel)
-      : tree_(tree), scene_(scene), has_spheres_(!scene.spheres.empty()), parallel_(parallel) {
+      : tree_(tree), scene_(scene), parallel_(parallel) {
     if (options.method == BvhCollapse::sah) {
       sah_.emplace(tree, scene, options, parallel);
     } else {
@@ -287,9 +291,7 @@ class Collapser {
   /// The packets pack_leaf makes for binary leaf `index`.
   std::uint32_t binary_leaf_packets(std::uint32_t index) const {
     const Bvh2Node& c = tree_.nodes[index];
-    std::uint32_t spheres = 0;
-    if (has_spheres_)
-      for (std::uint32_t k = 0; k < c.count; ++k) spheres += scene_.is_sphere(tree_.prims[c.first + k]);
+    const std::uint32_t spheres = leaf_spheres(tree_, scene_, c);
     return static_cast<std::uint32_t>(packed_leaf_packets(c.count - spheres, spheres));
   }
 
@@ -333,7 +335,6 @@ class Collapser {
 
   const Bvh2& tree_;
   const Scene& scene_;
-  const bool has_spheres_;
   const bool parallel_;
   std::optional<SahCollapse<N>> sah_;
   std::unique_ptr<WideSize[]> greedy_sizes_;  ///< BvhCollapse::greedy: the sizes of the nodes it turns into wide nodes
