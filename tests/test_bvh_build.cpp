@@ -395,6 +395,28 @@ TEST(BvhOptimize, ReinsertionKeepsLeavesAndContainmentAndNeverRaisesTheSahCost) 
   }
 }
 
+TEST(BvhOptimize, ReinsertionIsTheSameWithAnyThreadCount) {
+  // 150k boxes: ~75k interior nodes, more than the parallel set-up's and ranking's 2^14 blocks.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 100.0f), s(0.0f, 2.0f);
+  std::vector<Bounds3f> boxes(150000);
+  for (auto& b : boxes) {
+    const Vec3f p(u(rng), u(rng), u(rng));
+    b = Bounds3f(p, p + Vec3f(s(rng), s(rng), s(rng)));
+  }
+  const BvhConfig config = config_for(BvhBuilder::binned, 1);
+  const Bvh2 plain = build_bvh_over_boxes(boxes, config);
+  Bvh2 one = plain;
+  const BvhOptimizeStats serial = optimize_bvh_reinsertion(one, config.cost, 3, 0.0, 1);
+  EXPECT_LT(serial.cost_after, serial.cost_before);
+  for (int threads : {2, 0}) {
+    Bvh2 many = plain;
+    const BvhOptimizeStats parallel = optimize_bvh_reinsertion(many, config.cost, 3, 0.0, threads);
+    EXPECT_EQ(parallel.moves, serial.moves) << threads << " threads";
+    expect_equal_trees(one, many);
+  }
+}
+
 TEST(BvhOptimize, PassLimitAndTinyTrees) {
   const Scene scene = scene_from_spec("soup:n=3000");
   BvhConfig config = config_for(BvhBuilder::midpoint);

@@ -106,7 +106,7 @@ class MidpointMedianBuilder {
 
 Bvh2 optimized(Bvh2 bvh, const BvhConfig& config) {
   if (config.optimize == BvhOptimize::reinsert)
-    optimize_bvh_reinsertion(bvh, config.cost, config.optimize_passes, config.optimize_budget);
+    optimize_bvh_reinsertion(bvh, config.cost, config.optimize_passes, config.optimize_budget, config.threads);
   return bvh;
 }
 

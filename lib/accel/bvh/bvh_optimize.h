@@ -35,10 +35,12 @@ struct BvhOptimizeStats {
 /// nodes, laid out depth first with siblings adjacent as the builders lay them out. Every move
 /// lowers the cost, so the cost never rises; a result deeper than kBvhMaxDepth is discarded (the
 /// input stays). Stops when `max_passes` (0: no limit) passes ran, when `budget_seconds` (0: no
-/// limit) have passed (then the tree depends on timing), or when fifty passes in a row lowered the
-/// cost by less than 0.1% in all. Each pass chooses 2% of the interior nodes, none chosen in the
-/// 50 passes before. Deterministic without a time budget. Single threaded.
+/// limit) have passed since the passes began (asked every 64 nodes of a pass; the tree then
+/// depends on timing), or when fifty passes in a row lowered the cost by less than 0.1% in all.
+/// Each pass chooses 2% of the interior nodes, none chosen in the 50 passes before. The moves
+/// run on one thread; `threads` other than 1 (0: the TBB arena's) sets up the tree and ranks each
+/// pass's nodes in TBB tasks, with the same result. Deterministic without a time budget.
 BvhOptimizeStats optimize_bvh_reinsertion(Bvh2& bvh, const BvhSahCost& cost, int max_passes = 0,
-                                          double budget_seconds = 0.0);
+                                          double budget_seconds = 0.0, int threads = 1);
 
 }  // namespace raylab
