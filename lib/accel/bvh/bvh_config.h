@@ -93,10 +93,10 @@ struct BvhConfig {
   BvhOptimize optimize = BvhOptimize::none;
   /// Optimisation passes at most; 0 runs until the SAH cost stops improving (bvh_optimize.h).
   int optimize_passes = 0;
-  /// Wall time of the optimisation passes at most, in seconds, checked between passes; 0 gives no
-  /// limit (a limit makes the tree depend on the machine's speed). Setting up the passes and
-  /// writing the tree back are not counted: 0.1 s of passes added 0.17-0.21 s to the build at
-  /// 1.2·10^6 triangles (docs/bvh_scale, bench_bvh_build).
+  /// Wall time of the optimisation passes at most, in seconds, asked every 64 nodes of a pass; 0
+  /// gives no limit (a limit makes the tree depend on the machine's speed). Setting up the passes
+  /// and writing the tree back are not counted (what the whole optimisation adds to the build:
+  /// docs/bvh_scale, bench_bvh_build).
   double optimize_budget = 0.0;
   /// How the wide tree (width 4 or 8) is collapsed from the binary one.
   BvhCollapse collapse = BvhCollapse::sah;
