@@ -709,8 +709,8 @@ class CostModelExperiment {
     md += "\n### Build time\n\nSeconds to build, per accelerator spec, a·N·log2 N + b·N (+ c where selection keeps it), "
           "fitted with Ceres on the data set's builds (lib/cost/build_time_model.h); held-out: leave one scene out "
           "(goal: MAPE ≤ 15%). `raylab predict` prints the prediction and its 90% interval. a and b carry the fit's "
-          "± one standard error; a term the selection dropped reads *dropped*. Each row's build time is the fastest of up "
-          "to 3 builds by the sweep (fewer once they total 0.5 s: `build_passes` in cost_runs.csv), so these errors "
+          "± one standard error; a term the selection dropped reads *dropped*. Each row's build time is the fastest of 2 "
+          "or 3 builds by the sweep (the third while they total under 0.5 s: `build_passes` in cost_runs.csv), so these errors "
           "are the scatter of those builds about the model.\n\n"
           "| accel | rows | N range | a (ns per N·log2 N) ± s.e. | b (ns per N) ± s.e. | held-out MAPE | coverage |\n"
           "|---|---|---|---|---|---|---|\n";

@@ -240,11 +240,11 @@ std::string deterministic_part(RunRecord r) {
   r.embree_ns_per_ray_max = r.build_s_max = 0;
   r.embree_bytes = 0;  // Embree's allocator
   r.passes = 0;
-  r.build_passes = 0;  // fewer builds once they total kSweepBuildSeconds
+  r.build_passes = 0;  // no third build once they total kSweepBuildSeconds
   return to_csv_row(r);
 }
 
-TEST(CostSweep, BuildTimeIsTheFastestOfItsPassesWithinTheirBudget) {
+TEST(CostSweep, BuildTimeIsTheFastestOfAtLeastTwoPassesWithinTheirBudget) {
   const auto scene = make_scene("soup:n=2000");
   const BuiltStructure once = build_structure("bvh", scene, 1);
   EXPECT_EQ(once.build_passes, 1);
@@ -252,8 +252,10 @@ TEST(CostSweep, BuildTimeIsTheFastestOfItsPassesWithinTheirBudget) {
   EXPECT_EQ(thrice.build_passes, 3);
   EXPECT_GT(thrice.build_s, 0.0);
   EXPECT_EQ(thrice.accel->structure_hash(), once.accel->structure_hash());  // the same tree, built again
-  // A budget the first build already spends: one build.
-  EXPECT_EQ(build_structure("bvh", scene, 1, 3, 1e-12).build_passes, 1);
+  // A budget the first build already spends: two builds all the same (the first of a process
+  // pays for memory it has never touched), and no third.
+  EXPECT_EQ(build_structure("bvh", scene, 1, 3, 1e-12).build_passes, 2);
+  EXPECT_EQ(build_structure("bvh", scene, 1, 1, 1e-12).build_passes, 1);
 }
 
 TEST(CostSweep, ShardsMergeToTheUnshardedDataSet) {
@@ -275,7 +277,7 @@ TEST(CostSweep, ShardsMergeToTheUnshardedDataSet) {
   for (std::size_t i = 0; i < whole.size(); ++i) {
     EXPECT_EQ(deterministic_part(merged[i]), deterministic_part(whole[i]));
     EXPECT_GE(whole[i].passes, 5);
-    EXPECT_GE(whole[i].build_passes, 1);
+    EXPECT_GE(whole[i].build_passes, 2);
     EXPECT_LE(whole[i].build_passes, kSweepBuildPasses);
     EXPECT_GT(whole[i].ns_per_ray_min, 0);
     EXPECT_GT(whole[i].embree_ns_per_ray_min, 0);

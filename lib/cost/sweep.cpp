@@ -362,7 +362,7 @@ BuiltStructure build_structure(const std::string& accel_spec, const std::shared_
   BuiltStructure b;
   TimingArena arena(threads);
   double total = 0;
-  for (int pass = 0; pass < std::max(max_passes, 1) && (pass == 0 || total < max_seconds); ++pass) {
+  for (int pass = 0; pass < std::max(max_passes, 1) && (pass < 2 || total < max_seconds); ++pass) {
     b.accel.reset();
     const auto start = std::chrono::steady_clock::now();
     arena.execute([&] { b.accel = make_accelerator(accel_spec, scene, model_build_context()); });

@@ -126,13 +126,16 @@ struct BuiltStructure {
 };
 
 /// The builds a sweep times per structure: up to kSweepBuildPasses, fewer once they total
-/// kSweepBuildSeconds (a single build of a large scene is steady; a millisecond build is not).
+/// kSweepBuildSeconds, but never fewer than two. A process's first build of a large scene writes
+/// memory it has never touched, and its page faults vary from process to process: the data set at
+/// 1d92509 timed such scenes once, and those builds differed by 25% between replicates (mean of 4
+/// pairs) against 9% for the scenes built three times (57 pairs).
 inline constexpr int kSweepBuildPasses = 3;
 inline constexpr double kSweepBuildSeconds = 0.5;
 
 /// Builds `accel_spec` on `scene` in an arena of `threads` threads, up to `max_passes` times
-/// (fewer once the builds total `max_seconds`; each build freed before the next, so no two are
-/// held at once), keeps the last and reads its features.
+/// (fewer once the builds total `max_seconds`, but at least two when `max_passes` allows; each
+/// build freed before the next, so no two are held at once), keeps the last and reads its features.
 BuiltStructure build_structure(const std::string& accel_spec, const std::shared_ptr<const Scene>& scene, int threads,
                                int max_passes = 1, double max_seconds = 0);
 
