@@ -62,8 +62,8 @@ bool same_box(const Bounds3f& a, const Bounds3f& b) {
 /// be written back over the input's nodes.
 struct LinkedNode {
   Bounds3f box;
-  std::uint32_t left = 0;   ///< left child, or kLeafBit | primitive count
-  std::uint32_t right = 0;  ///< right child, or the leaf's first reference
+  std::uint32_t left;   ///< left child, or kLeafBit | primitive count
+  std::uint32_t right;  ///< right child, or the leaf's first reference
 };
 static_assert(sizeof(LinkedNode) == 32);
 constexpr std::uint32_t kLeafBit = std::uint32_t{1} << 31;
@@ -74,8 +74,8 @@ class Reinserter {
   /// optimize_bvh_reinsertion.
   Reinserter(const Bvh2& bvh, int threads) : threads_(threads) {
     const std::size_t n = bvh.nodes.size();
-    // BuildArray: written in full below, not zeroed first, in huge pages (a 4 KiB page fault
-    // costs ~3.5 ms per MB first written on this VM, build_array_allocator.h).
+    // BuildArrays, in huge pages: a 4 KiB page fault costs ~3.5 ms per MB first written on this
+    // VM (build_array_allocator.h).
     nodes_.resize(n);
     parent_.resize(n);
     last_chosen_.resize(n);
@@ -152,8 +152,8 @@ class Reinserter {
         candidates_[k].first = m_sum * m_min * a;
       }
     });
-    candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(), [](const auto& c) { return !(c.first > 0.0); }),
-                      candidates_.end());
+    const auto not_eligible = [](const auto& c) { return !(c.first > 0.0); };
+    candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(), not_eligible), candidates_.end());
     const auto batch = std::min(candidates_.size(),
                                 std::max<std::size_t>(1, static_cast<std::size_t>(kBatchFraction * interior_.size())));
     auto worse_first = [](const auto& x, const auto& y) { return x.first > y.first || (x.first == y.first && x.second < y.second); };
