@@ -127,9 +127,10 @@ struct BuiltStructure {
 
 /// The builds a sweep times per structure: up to kSweepBuildPasses, fewer once they total
 /// kSweepBuildSeconds, but never fewer than two. A process's first build of a large scene writes
-/// memory it has never touched, and its page faults vary from process to process: the data set at
-/// 1d92509 timed such scenes once, and those builds differed by 25% between replicates (mean of 4
-/// pairs) against 9% for the scenes built three times (57 pairs).
+/// memory it has never touched, and its page faults vary from process to process: in
+/// docs/results/cost_runs.csv at 1d92509, which timed such scenes once, the `build_s` of replicate
+/// 1 differed from replicate 0's by 25% (mean of the 4 pairs built once) against 9% (57 pairs built
+/// three times).
 inline constexpr int kSweepBuildPasses = 3;
 inline constexpr double kSweepBuildSeconds = 0.5;
 
